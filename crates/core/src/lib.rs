@@ -1,0 +1,19 @@
+//! Core types of interslice: volumes and their geometry, slices, and the pure
+//! algorithms built on them (contours, rasterisation, metrics, thresholds).
+//!
+//! This crate does no I/O. Conventions (shared by every crate) are fixed in
+//! `DESIGN.md`: dims `(nx, ny, nz)`, voxel `(i, j, k)`, x-fastest storage
+//! `index = i + nx * (j + ny * k)`.
+#![deny(missing_docs)]
+
+pub mod contour;
+pub mod error;
+pub mod geometry;
+pub mod slice;
+pub mod volume;
+
+pub use contour::Contour;
+pub use error::CoreError;
+pub use geometry::{Geometry, LengthUnit};
+pub use slice::{Axis, SliceRef};
+pub use volume::{AnyVolume, LabelVolume, Mask, Volume, Voxel};

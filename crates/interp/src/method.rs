@@ -1,0 +1,40 @@
+//! The interpolator trait shared by every method.
+use interslice_core::{Axis, Mask};
+use thiserror::Error;
+
+/// Errors of interpolation; messages are one line for the user.
+#[derive(Debug, Error)]
+pub enum InterpError {
+    /// Fewer than two drawn slices, or other unusable input.
+    #[error("{0}")]
+    Input(String),
+    /// A core error (geometry, slice range).
+    #[error(transparent)]
+    Core(#[from] interslice_core::CoreError),
+}
+
+/// The input of one interpolation: one label's mask, whose drawn slices
+/// along `axis` carry the tracing, and the sorted, de-duplicated drawn indices.
+#[derive(Debug, Clone, Copy)]
+pub struct SparseMask<'a> {
+    /// Foreground voxels of the label on the drawn slices (other slices ignored).
+    pub mask: &'a Mask,
+    /// Axis the slices were drawn along.
+    pub axis: Axis,
+    /// Drawn slice indices along `axis`, sorted ascending, no duplicates.
+    pub drawn: &'a [usize],
+}
+
+/// A method that fills the slices between drawn slices.
+///
+/// Every implementation must: reproduce the drawn slices exactly (or document
+/// a mesh-based deviation), never put voxels on a drawn slice that is empty,
+/// work along any axis with anisotropic spacing (`mask.geometry().spacing`).
+pub trait Interpolator: Send + Sync {
+    /// The `--method` name, e.g. `shape-based`.
+    fn name(&self) -> &'static str;
+    /// One line for `interpolate --list`.
+    fn description(&self) -> &'static str;
+    /// Interpolate one label's mask.
+    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError>;
+}

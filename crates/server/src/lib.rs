@@ -1,0 +1,2 @@
+//! HTTP API and the embedded web UI.
+#![deny(missing_docs)]

@@ -1,0 +1,2 @@
+//! The annotation database (SQLite) and its migrations.
+#![deny(missing_docs)]

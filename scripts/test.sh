@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Runs every test of interslice: formatting, lints, the Rust test suite, then
+# every scripts/test-*.sh (cross-checks with Python libraries, web unit and
+# end-to-end tests). Each of those installs what it needs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== cargo fmt --check"
+cargo fmt --all --check
+echo "== cargo clippy"
+cargo clippy --workspace --all-targets -- -D warnings
+echo "== cargo test"
+cargo test --workspace
+for t in scripts/test-*.sh; do
+  [ -e "$t" ] || continue
+  echo "== $t"
+  bash "$t"
+done
+echo "all tests passed"
