@@ -27,4 +27,25 @@ pub struct Contour {
     /// Milliseconds since the stroke began, per point, when recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub times_ms: Option<Vec<f64>>,
+    /// The drawing tool ("pen", "mouse", "touch", "import", ...), when known:
+    /// tracing precision differs between devices, so studies compare them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<String>,
+}
+
+impl Contour {
+    /// A contour without timing, pressure or tool (e.g. one derived from a mask),
+    /// so callers need not list every optional field.
+    pub fn new(slice: SliceRef, label: u16, points: Vec<[f64; 2]>, author: impl Into<String>, created: impl Into<String>) -> Contour {
+        Contour {
+            slice,
+            label,
+            points,
+            author: author.into(),
+            created: created.into(),
+            pressure: None,
+            times_ms: None,
+            tool: None,
+        }
+    }
 }

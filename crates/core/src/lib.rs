@@ -7,9 +7,20 @@
 #![deny(missing_docs)]
 
 pub mod contour;
+pub mod contour_file;
+pub mod edt;
 pub mod error;
 pub mod geometry;
+pub mod raster;
+pub mod mesh;
+pub mod phantom;
+pub mod metrics;
+pub mod morph;
+pub mod segment;
+pub mod staple;
+pub mod threshold;
 pub mod slice;
+pub mod trace;
 pub mod volume;
 
 pub use contour::Contour;

@@ -5,6 +5,18 @@
 //! given explicitly: a drawn slice with no foreground is a known-empty slice.
 #![deny(missing_docs)]
 
+pub mod aligned;
+pub mod drawn;
+pub mod labels;
+pub mod linear;
+pub mod mesh;
 pub mod method;
+pub mod registry;
+pub mod sdf;
+pub mod shape_based;
+pub mod shape_cubic;
+pub mod slices;
 
+pub use labels::interpolate_labels;
 pub use method::{InterpError, Interpolator, SparseMask};
+pub use registry::{DEFAULT_METHOD, by_name, methods};

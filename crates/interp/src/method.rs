@@ -38,3 +38,30 @@ pub trait Interpolator: Send + Sync {
     /// Interpolate one label's mask.
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError>;
 }
+
+impl SparseMask<'_> {
+    /// Check what every method relies on: at least two drawn slices, sorted,
+    /// unique and inside the volume. Returns the number of slices along the axis.
+    pub fn validate(&self) -> Result<usize, InterpError> {
+        let n = self.mask.slice_count(self.axis);
+        if self.drawn.len() < 2 {
+            return Err(InterpError::Input(format!(
+                "interpolation needs at least two drawn slices along {}, got {}",
+                self.axis,
+                self.drawn.len()
+            )));
+        }
+        if let Some(&bad) = self.drawn.iter().find(|&&d| d >= n) {
+            return Err(InterpError::Input(format!(
+                "drawn slice {}={bad} is out of range (0..{n})",
+                self.axis
+            )));
+        }
+        if self.drawn.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(InterpError::Input(
+                "drawn slice indices must be sorted ascending without duplicates".into(),
+            ));
+        }
+        Ok(n)
+    }
+}

@@ -1,5 +1,14 @@
-//! `interslice info FILE`: dims, spacing, type, range, labels.
+//! `interslice info FILE [--json]`: format, dims, spacing + unit, origin,
+//! direction, voxel type, value range and, for label volumes, every label
+//! with its voxel count and physical volume.
+use anyhow::Context;
+use interslice_core::AnyVolume;
+use serde_json::{Value, json};
 use std::path::PathBuf;
+
+/// An integer volume with at most this many distinct values (0 included) is
+/// reported as a label volume unless `--labels` says so explicitly.
+const MAX_AUTO_LABELS: usize = 64;
 
 /// Arguments of `info`.
 #[derive(clap::Args)]
@@ -9,9 +18,161 @@ pub struct Args {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// List every non-zero value as a label even when there are many.
+    #[arg(long)]
+    pub labels: bool,
+}
+
+/// Voxel counts of every distinct integer value, or None for float volumes.
+fn value_counts(v: &AnyVolume) -> Option<Vec<(i64, u64)>> {
+    let mut counts = vec![0u64; 65536];
+    let offset: i64 = match v {
+        AnyVolume::U8(v) => {
+            v.data().iter().for_each(|&x| counts[x as usize] += 1);
+            0
+        }
+        AnyVolume::U16(v) => {
+            v.data().iter().for_each(|&x| counts[x as usize] += 1);
+            0
+        }
+        AnyVolume::I16(v) => {
+            v.data()
+                .iter()
+                .for_each(|&x| counts[(i32::from(x) + 32768) as usize] += 1);
+            -32768
+        }
+        AnyVolume::F32(_) => return None,
+    };
+    Some(
+        counts
+            .into_iter()
+            .enumerate()
+            .filter(|&(_, c)| c > 0)
+            .map(|(i, c)| (i as i64 + offset, c))
+            .collect(),
+    )
+}
+
+fn fmt_num(x: f64) -> String {
+    // Shortest representation that round-trips (no "0.35000000000000003" from f32 noise
+    // is possible here: values are f64 read from the file).
+    let s = format!("{x}");
+    if s.len() > 12 { format!("{x:.6}") } else { s }
 }
 
 /// Run `info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("cannot read {}: file formats are not implemented yet (json={})", args.input.display(), args.json)
+    let format = interslice_io::Format::of_path(&args.input)?;
+    let v = interslice_io::read_volume(&args.input)?;
+    let g = v.geometry().clone();
+    let (min, max) = v.min_max();
+    let unit = g.unit.symbol();
+    let counts = value_counts(&v);
+    let labels: Option<Vec<(i64, u64)>> = counts.and_then(|c| {
+        let all_labels = c.iter().all(|&(val, _)| val >= 0);
+        if all_labels && (args.labels || c.len() <= MAX_AUTO_LABELS) {
+            Some(c.into_iter().filter(|&(val, _)| val != 0).collect())
+        } else {
+            None
+        }
+    });
+    if args.labels && labels.is_none() {
+        anyhow::bail!(
+            "{}: a {} volume{} cannot be listed as labels",
+            args.input.display(),
+            v.type_name(),
+            if v.type_name() == "f32" {
+                ""
+            } else {
+                " with negative values"
+            }
+        );
+    }
+    let voxel_volume = g.voxel_volume();
+    if args.json {
+        let labels_json: Value = match &labels {
+            Some(l) => Value::Array(
+                l.iter()
+                    .map(|&(label, n)| json!({"label": label, "voxels": n, "volume": n as f64 * voxel_volume}))
+                    .collect(),
+            ),
+            None => Value::Null,
+        };
+        let out = json!({
+            "path": args.input.display().to_string(),
+            "format": format.name(),
+            "dims": g.dims,
+            "spacing": g.spacing,
+            "unit": unit,
+            "origin": g.origin,
+            "direction": g.direction,
+            "dtype": v.type_name(),
+            "min": min,
+            "max": max,
+            "voxel_volume": voxel_volume,
+            "labels": labels_json,
+        });
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&out).context("cannot format JSON")?
+        );
+        return Ok(());
+    }
+    let [nx, ny, nz] = g.dims;
+    let [sx, sy, sz] = g.spacing;
+    println!("file:       {}", args.input.display());
+    println!("format:     {}", format.name());
+    println!("dims:       {nx} x {ny} x {nz}  ({} voxels)", g.len());
+    println!(
+        "spacing:    {} x {} x {} {unit}",
+        fmt_num(sx),
+        fmt_num(sy),
+        fmt_num(sz)
+    );
+    println!(
+        "origin:     ({}, {}, {}) {unit}",
+        fmt_num(g.origin[0]),
+        fmt_num(g.origin[1]),
+        fmt_num(g.origin[2])
+    );
+    let d = g.direction;
+    println!(
+        "direction:  [{} {} {}; {} {} {}; {} {} {}]",
+        fmt_num(d[0][0]),
+        fmt_num(d[0][1]),
+        fmt_num(d[0][2]),
+        fmt_num(d[1][0]),
+        fmt_num(d[1][1]),
+        fmt_num(d[1][2]),
+        fmt_num(d[2][0]),
+        fmt_num(d[2][1]),
+        fmt_num(d[2][2])
+    );
+    println!("type:       {}", v.type_name());
+    println!("range:      {} .. {}", fmt_num(min), fmt_num(max));
+    println!(
+        "size:       {} x {} x {} {unit}  (voxel {} {unit}³)",
+        fmt_num(nx as f64 * sx),
+        fmt_num(ny as f64 * sy),
+        fmt_num(nz as f64 * sz),
+        fmt_num(voxel_volume)
+    );
+    if let Some(labels) = labels {
+        println!("labels:     {}", labels.len());
+        if !labels.is_empty() {
+            println!(
+                "  {:>6}  {:>12}  {:>14}",
+                "label",
+                "voxels",
+                format!("volume ({unit}³)")
+            );
+            for (label, n) in labels {
+                println!(
+                    "  {label:>6}  {n:>12}  {:>14}",
+                    fmt_num(n as f64 * voxel_volume)
+                );
+            }
+        }
+    }
+    Ok(())
 }

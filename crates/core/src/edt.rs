@@ -1,0 +1,564 @@
+//! Exact squared Euclidean distance transform (EDT) on anisotropic grids.
+//!
+//! The transform is separable: a first pass along x finds, in every row, the
+//! distance to the nearest feature pixel of that row; each further pass (y, then z)
+//! takes the lower envelope of parabolas `s²·(p − q)² + f(q)` along its lines,
+//! which is the algorithm of Felzenszwalb & Huttenlocher, "Distance Transforms of
+//! Sampled Functions" (Theory of Computing, 2012). The result is exact: every value
+//! is `Σ (s_a · Δ_a)²` for the nearest feature pixel, not an approximation such as
+//! a chamfer distance.
+//!
+//! Written here rather than taken from a crate because no maintained Rust crate
+//! offers an exact, anisotropic, parallel 3D transform; the algorithm is short and
+//! is checked against brute force by property tests.
+//!
+//! Every pass runs in parallel over lines with rayon. Lines that are strided in
+//! memory (y and z) are processed in blocks of adjacent columns so that reads and
+//! writes touch contiguous runs of memory.
+//!
+//! Values are in physical units² (spacing²). A pixel with no feature anywhere gets
+//! `f64::INFINITY`. The `_f32` variants store the result as `f32` (half the memory
+//! at 512³; relative error below 1e-6, since every line is computed in `f64` and
+//! only stored in `f32` between passes).
+use rayon::prelude::*;
+
+/// Number of adjacent columns handled together in a strided pass.
+const BLOCK: usize = 32;
+
+/// Storage type of a transform: `f64` (exact) or `f32` (half the memory).
+pub trait EdtValue: Copy + Send + Sync + 'static {
+    /// Convert from the `f64` computed along a line.
+    fn from_f64(x: f64) -> Self;
+    /// Convert to `f64` for the next pass.
+    fn to_f64(self) -> f64;
+}
+
+impl EdtValue for f64 {
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl EdtValue for f32 {
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
+/// Squared Euclidean distance (physical units²) from every pixel to the nearest
+/// `true` pixel; `f64::INFINITY` when there is none.
+///
+/// `features` is row-major, `features[u + width * v]`; `spacing` is `[su, sv]`.
+///
+/// # Panics
+/// If `features.len() != width * height` (a programming error).
+pub fn squared_edt_2d(
+    features: &[bool],
+    width: usize,
+    height: usize,
+    spacing: [f64; 2],
+) -> Vec<f64> {
+    squared_edt_2d_as::<f64>(features, width, height, spacing)
+}
+
+/// [`squared_edt_2d`] stored as `f32`.
+pub fn squared_edt_2d_f32(
+    features: &[bool],
+    width: usize,
+    height: usize,
+    spacing: [f64; 2],
+) -> Vec<f32> {
+    squared_edt_2d_as::<f32>(features, width, height, spacing)
+}
+
+/// Squared Euclidean distance (physical units²) from every voxel to the nearest
+/// `true` voxel; `f64::INFINITY` when there is none.
+///
+/// `features` is x-fastest, `features[i + nx * (j + ny * k)]`; `spacing` is
+/// `[sx, sy, sz]`.
+///
+/// # Panics
+/// If `features.len()` is not `nx * ny * nz` (a programming error).
+pub fn squared_edt_3d(features: &[bool], dims: [usize; 3], spacing: [f64; 3]) -> Vec<f64> {
+    squared_edt_3d_as::<f64>(features, dims, spacing)
+}
+
+/// [`squared_edt_3d`] stored as `f32`: half the memory (512 MiB instead of 1 GiB
+/// at 512³).
+pub fn squared_edt_3d_f32(features: &[bool], dims: [usize; 3], spacing: [f64; 3]) -> Vec<f32> {
+    squared_edt_3d_as::<f32>(features, dims, spacing)
+}
+
+/// Generic 2D transform.
+pub fn squared_edt_2d_as<S: EdtValue>(
+    features: &[bool],
+    width: usize,
+    height: usize,
+    spacing: [f64; 2],
+) -> Vec<S> {
+    assert_eq!(
+        features.len(),
+        width * height,
+        "features length must be width * height"
+    );
+    let mut out = vec![S::from_f64(f64::INFINITY); features.len()];
+    if width == 0 || height == 0 {
+        return out;
+    }
+    rows_pass(features, &mut out, width, spacing[0]);
+    strided_pass(&mut out, width, height, spacing[1]);
+    out
+}
+
+/// Generic 3D transform.
+pub fn squared_edt_3d_as<S: EdtValue>(
+    features: &[bool],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+) -> Vec<S> {
+    let mut out = squared_edt_xy_as::<S>(features, dims, spacing);
+    let [nx, ny, nz] = dims;
+    if nx * ny * nz > 0 && nz > 1 {
+        strided_pass(&mut out, nx * ny, nz, spacing[2]);
+    }
+    out
+}
+
+/// The transform restricted to each z-slab: passes along x and y only. Feeding
+/// this to a pass along z (e.g. [`LowerEnvelope`] on selected columns) completes
+/// the 3D transform; callers that need distances at a few voxels only can skip
+/// the columns they do not need.
+pub fn squared_edt_xy_as<S: EdtValue>(
+    features: &[bool],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+) -> Vec<S> {
+    let [nx, ny, nz] = dims;
+    let n = nx
+        .checked_mul(ny)
+        .and_then(|a| a.checked_mul(nz))
+        .expect("dims overflow");
+    assert_eq!(features.len(), n, "features length must be nx * ny * nz");
+    let mut out = vec![S::from_f64(f64::INFINITY); n];
+    if n == 0 {
+        return out;
+    }
+    rows_pass(features, &mut out, nx, spacing[0]);
+    if ny > 1 {
+        let slab = nx * ny;
+        out.par_chunks_mut(slab)
+            .for_each(|s| strided_pass(s, nx, ny, spacing[1]));
+    }
+    out
+}
+
+/// First pass: per row, `(s · distance to the nearest feature in the row)²`.
+fn rows_pass<S: EdtValue>(features: &[bool], out: &mut [S], width: usize, s: f64) {
+    let s2 = s * s;
+    out.par_chunks_mut(width)
+        .zip(features.par_chunks(width))
+        .for_each(|(o, f)| row_1d(f, o, s2));
+}
+
+/// Distance along one row by a forward and a backward sweep (exact in 1D).
+fn row_1d<S: EdtValue>(f: &[bool], out: &mut [S], s2: f64) {
+    let n = f.len();
+    // Forward: distance to the nearest feature at or left of p (as an index gap).
+    let mut last: Option<usize> = None;
+    for p in 0..n {
+        if f[p] {
+            last = Some(p);
+        }
+        out[p] = S::from_f64(match last {
+            Some(q) => {
+                let d = (p - q) as f64;
+                d * d * s2
+            }
+            None => f64::INFINITY,
+        });
+    }
+    if last.is_none() {
+        return;
+    }
+    // Backward: nearest feature at or right of p, if closer.
+    let mut next: Option<usize> = None;
+    for p in (0..n).rev() {
+        if f[p] {
+            next = Some(p);
+        }
+        if let Some(q) = next {
+            let d = (q - p) as f64;
+            let v = d * d * s2;
+            if v < out[p].to_f64() {
+                out[p] = S::from_f64(v);
+            }
+        }
+    }
+}
+
+/// A pass along the middle axis of a `[outer][len][inner]` layout with
+/// `outer = 1`: lines run over `len` with stride `inner`. Columns are split into
+/// blocks of [`BLOCK`] adjacent columns; each block owns disjoint sub-slices of
+/// every row, so blocks run in parallel without unsafe code.
+fn strided_pass<S: EdtValue>(data: &mut [S], inner: usize, len: usize, s: f64) {
+    if len <= 1 || inner == 0 {
+        return;
+    }
+    let s2 = s * s;
+    let nblocks = inner.div_ceil(BLOCK);
+    let mut blocks: Vec<Vec<&mut [S]>> = (0..nblocks).map(|_| Vec::with_capacity(len)).collect();
+    for row in data.chunks_mut(inner) {
+        let mut rest = row;
+        for b in blocks.iter_mut() {
+            let w = rest.len().min(BLOCK);
+            let (head, tail) = rest.split_at_mut(w);
+            b.push(head);
+            rest = tail;
+        }
+    }
+    blocks.into_par_iter().for_each_init(
+        || {
+            (
+                vec![0.0f64; BLOCK * len],
+                vec![0.0f64; len],
+                LowerEnvelope::with_capacity(len),
+            )
+        },
+        |(buf, line, env), mut rows| {
+            let w = rows[0].len();
+            // Gather: buf[c * len + p] = rows[p][c].
+            for (p, r) in rows.iter().enumerate() {
+                for (c, v) in r.iter().enumerate() {
+                    buf[c * len + p] = v.to_f64();
+                }
+            }
+            for c in 0..w {
+                let col = &buf[c * len..(c + 1) * len];
+                env.build(col, s2);
+                env.evaluate_into(line);
+                buf[c * len..(c + 1) * len].copy_from_slice(line);
+            }
+            // Scatter back.
+            for (p, r) in rows.iter_mut().enumerate() {
+                for (c, v) in r.iter_mut().enumerate() {
+                    *v = S::from_f64(buf[c * len + p]);
+                }
+            }
+        },
+    );
+}
+
+/// The lower envelope of the parabolas `y = s²·(p − q)² + f(q)` of one line, for
+/// the finite values `f(q)`: evaluating it at `p` gives the squared distance
+/// `min_q s²·(p − q)² + f(q)`.
+#[derive(Debug, Clone, Default)]
+pub struct LowerEnvelope {
+    /// Positions `q` of the parabolas on the envelope, left to right.
+    v: Vec<usize>,
+    /// Their heights `f(q)`.
+    h: Vec<f64>,
+    /// `z[k]`: where parabola `k` starts to be the lowest (`z[0] = −∞`).
+    z: Vec<f64>,
+    s2: f64,
+    len: usize,
+}
+
+impl LowerEnvelope {
+    /// An empty envelope with room for lines of `len` samples.
+    pub fn with_capacity(len: usize) -> Self {
+        LowerEnvelope {
+            v: Vec::with_capacity(len),
+            h: Vec::with_capacity(len),
+            z: Vec::with_capacity(len + 1),
+            s2: 1.0,
+            len: 0,
+        }
+    }
+
+    /// Build the envelope of line `f` (squared distances so far; infinite values
+    /// are ignored) for sample spacing² `s2`.
+    pub fn build(&mut self, f: &[f64], s2: f64) {
+        self.v.clear();
+        self.h.clear();
+        self.z.clear();
+        self.s2 = s2;
+        self.len = f.len();
+        for (q, &fq) in f.iter().enumerate() {
+            if !fq.is_finite() {
+                continue;
+            }
+            let qf = q as f64;
+            // Pop parabolas hidden by q; z[0] = -inf, so the first one always stays.
+            let mut s;
+            loop {
+                let Some(&p) = self.v.last() else {
+                    s = f64::NEG_INFINITY;
+                    break;
+                };
+                let pf = p as f64;
+                let hp = *self.h.last().expect("h parallels v");
+                s = ((fq + s2 * qf * qf) - (hp + s2 * pf * pf)) / (2.0 * s2 * (qf - pf));
+                if s <= *self.z.last().expect("z parallels v") {
+                    self.v.pop();
+                    self.h.pop();
+                    self.z.pop();
+                } else {
+                    break;
+                }
+            }
+            self.v.push(q);
+            self.h.push(fq);
+            self.z.push(s);
+        }
+    }
+
+    /// True when the line had no finite value (every evaluation is infinite).
+    pub fn is_empty(&self) -> bool {
+        self.v.is_empty()
+    }
+
+    /// Evaluate at every sample `0..len` into `out` (length `len`).
+    pub fn evaluate_into(&self, out: &mut [f64]) {
+        debug_assert_eq!(out.len(), self.len);
+        if self.v.is_empty() {
+            out.fill(f64::INFINITY);
+            return;
+        }
+        let mut k = 0;
+        let last = self.v.len() - 1;
+        for (p, o) in out.iter_mut().enumerate() {
+            let pf = p as f64;
+            while k < last && self.z[k + 1] < pf {
+                k += 1;
+            }
+            let d = pf - self.v[k] as f64;
+            *o = self.s2 * d * d + self.h[k];
+        }
+    }
+
+    /// Evaluate at sample positions `ps`, which must be ascending, calling
+    /// `f(p, value)` for each.
+    pub fn evaluate_sorted(
+        &self,
+        ps: impl IntoIterator<Item = usize>,
+        mut f: impl FnMut(usize, f64),
+    ) {
+        if self.v.is_empty() {
+            for p in ps {
+                f(p, f64::INFINITY);
+            }
+            return;
+        }
+        let mut k = 0;
+        let last = self.v.len() - 1;
+        for p in ps {
+            let pf = p as f64;
+            while k < last && self.z[k + 1] < pf {
+                k += 1;
+            }
+            let d = pf - self.v[k] as f64;
+            f(p, self.s2 * d * d + self.h[k]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn brute_2d(f: &[bool], w: usize, h: usize, s: [f64; 2]) -> Vec<f64> {
+        let mut out = vec![f64::INFINITY; w * h];
+        for v in 0..h {
+            for u in 0..w {
+                let mut best = f64::INFINITY;
+                for b in 0..h {
+                    for a in 0..w {
+                        if f[a + w * b] {
+                            let du = (u as f64 - a as f64) * s[0];
+                            let dv = (v as f64 - b as f64) * s[1];
+                            best = best.min(du * du + dv * dv);
+                        }
+                    }
+                }
+                out[u + w * v] = best;
+            }
+        }
+        out
+    }
+
+    fn brute_3d(f: &[bool], d: [usize; 3], s: [f64; 3]) -> Vec<f64> {
+        let [nx, ny, nz] = d;
+        let pts: Vec<[usize; 3]> = (0..nx * ny * nz)
+            .filter(|&n| f[n])
+            .map(|n| [n % nx, (n / nx) % ny, n / (nx * ny)])
+            .collect();
+        (0..nx * ny * nz)
+            .map(|n| {
+                let q = [n % nx, (n / nx) % ny, n / (nx * ny)];
+                pts.iter()
+                    .map(|p| {
+                        (0..3)
+                            .map(|a| {
+                                let x = (p[a] as f64 - q[a] as f64) * s[a];
+                                x * x
+                            })
+                            .sum::<f64>()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect()
+    }
+
+    fn close(a: f64, b: f64, rel: f64) -> bool {
+        if a.is_infinite() || b.is_infinite() {
+            return a == b;
+        }
+        (a - b).abs() <= rel * a.abs().max(b.abs()).max(1e-12)
+    }
+
+    fn grid_2d() -> impl Strategy<Value = (usize, usize, Vec<bool>, [f64; 2], u8)> {
+        (1usize..14, 1usize..14, 0.2f64..3.0, 0.2f64..3.0, 0u8..4).prop_flat_map(
+            |(w, h, a, b, mode)| {
+                (
+                    Just(w),
+                    Just(h),
+                    proptest::collection::vec(proptest::bool::weighted(0.15), w * h),
+                    Just([a, b]),
+                    Just(mode),
+                )
+            },
+        )
+    }
+
+    fn grid_3d() -> impl Strategy<Value = ([usize; 3], Vec<bool>, [f64; 3], u8)> {
+        (
+            1usize..9,
+            1usize..9,
+            1usize..9,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0u8..4,
+        )
+            .prop_flat_map(|(x, y, z, a, b, c, mode)| {
+                (
+                    Just([x, y, z]),
+                    proptest::collection::vec(proptest::bool::weighted(0.1), x * y * z),
+                    Just([a, b, c]),
+                    Just(mode),
+                )
+            })
+    }
+
+    /// mode 0: random; 1: empty; 2: full; 3: a single feature.
+    fn apply_mode(f: &mut [bool], mode: u8) {
+        match mode {
+            1 => f.fill(false),
+            2 => f.fill(true),
+            3 => {
+                let n = f.len();
+                f.fill(false);
+                f[n / 2] = true;
+            }
+            _ => {}
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn edt_2d_matches_brute_force((w, h, mut f, s, mode) in grid_2d()) {
+            apply_mode(&mut f, mode);
+            let got = squared_edt_2d(&f, w, h, s);
+            let want = brute_2d(&f, w, h, s);
+            for (n, (g, e)) in got.iter().zip(&want).enumerate() {
+                prop_assert!(close(*g, *e, 1e-12), "pixel {n}: {g} vs {e}");
+            }
+            let g32 = squared_edt_2d_f32(&f, w, h, s);
+            for (g, e) in g32.iter().zip(&want) {
+                prop_assert!(close(f64::from(*g), *e, 1e-6));
+            }
+        }
+
+        #[test]
+        fn edt_3d_matches_brute_force((d, mut f, s, mode) in grid_3d()) {
+            apply_mode(&mut f, mode);
+            let got = squared_edt_3d(&f, d, s);
+            let want = brute_3d(&f, d, s);
+            for (n, (g, e)) in got.iter().zip(&want).enumerate() {
+                prop_assert!(close(*g, *e, 1e-12), "voxel {n}: {g} vs {e}");
+            }
+            let g32 = squared_edt_3d_f32(&f, d, s);
+            for (g, e) in g32.iter().zip(&want) {
+                prop_assert!(close(f64::from(*g), *e, 1e-6));
+            }
+        }
+    }
+
+    #[test]
+    fn wide_volume_crosses_block_boundaries() {
+        // nx * ny > BLOCK so the z pass uses several column blocks.
+        let d = [11, 7, 5];
+        let mut f = vec![false; 11 * 7 * 5];
+        f[3 + 11 * (2 + 7 * 4)] = true;
+        f[10 + 11 * (6 + 7 * 0)] = true;
+        let s = [0.5, 1.0, 2.5];
+        let got = squared_edt_3d(&f, d, s);
+        assert_eq!(got, brute_3d(&f, d, s));
+    }
+
+    #[test]
+    fn known_values() {
+        // One feature at (0, 0) with spacing (2, 3): pixel (2, 1) is at 4² + 3².
+        let mut f = vec![false; 4 * 3];
+        f[0] = true;
+        let d = squared_edt_2d(&f, 4, 3, [2.0, 3.0]);
+        assert_eq!(d[2 + 4], 25.0);
+        assert_eq!(d[0], 0.0);
+        assert!(
+            squared_edt_2d(&[false; 6], 3, 2, [1.0, 1.0])
+                .iter()
+                .all(|x| x.is_infinite())
+        );
+        assert!(
+            squared_edt_3d(&[true; 8], [2, 2, 2], [1.0; 3])
+                .iter()
+                .all(|&x| x == 0.0)
+        );
+    }
+
+    #[test]
+    fn envelope_sorted_evaluation_matches_full() {
+        let f = [
+            f64::INFINITY,
+            4.0,
+            f64::INFINITY,
+            0.0,
+            9.0,
+            f64::INFINITY,
+            1.0,
+        ];
+        let mut env = LowerEnvelope::with_capacity(f.len());
+        env.build(&f, 2.0);
+        let mut full = vec![0.0; f.len()];
+        env.evaluate_into(&mut full);
+        let mut sampled = vec![];
+        env.evaluate_sorted([0, 2, 5, 6], |p, v| sampled.push((p, v)));
+        for (p, v) in sampled {
+            assert_eq!(v, full[p]);
+        }
+        assert_eq!(full[3], 0.0);
+        // q = 1 gives 4 + 2·1² = 6, q = 3 gives 0 + 2·3² = 18.
+        assert_eq!(full[0], 6.0);
+    }
+}

@@ -1,0 +1,165 @@
+//! Border voxels: foreground voxels with a 6-neighbour outside the mask, the
+//! outside of the image counting as background (the medpy/MONAI convention:
+//! `mask XOR erode(mask, 6-connected cross, border_value = 0)`).
+use rayon::prelude::*;
+
+/// Read access to a binary mask given as any voxel array plus a test, so the
+/// metrics run directly on label volumes without allocating masks.
+pub trait MaskView: Sync {
+    /// Dims `(nx, ny, nz)`.
+    fn dims(&self) -> [usize; 3];
+    /// True when the voxel at linear index `idx` is foreground.
+    fn fg(&self, idx: usize) -> bool;
+}
+
+/// The voxels of `data` equal to `value`.
+#[derive(Debug, Clone, Copy)]
+pub struct EqualTo<'a, T> {
+    /// Voxels, x-fastest.
+    pub data: &'a [T],
+    /// Dims `(nx, ny, nz)`; `data.len()` must be their product.
+    pub dims: [usize; 3],
+    /// The foreground value.
+    pub value: T,
+}
+
+impl<T: Copy + PartialEq + Sync> MaskView for EqualTo<'_, T> {
+    #[inline]
+    fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    #[inline]
+    fn fg(&self, idx: usize) -> bool {
+        self.data[idx] == self.value
+    }
+}
+
+/// True when voxel `(i, j, k)` is a border voxel of `m`.
+#[inline]
+pub fn is_border<M: MaskView>(m: &M, i: usize, j: usize, k: usize) -> bool {
+    let [nx, ny, nz] = m.dims();
+    let sy = nx;
+    let sz = nx * ny;
+    let idx = i + sy * j + sz * k;
+    if !m.fg(idx) {
+        return false;
+    }
+    i == 0
+        || j == 0
+        || k == 0
+        || i + 1 == nx
+        || j + 1 == ny
+        || k + 1 == nz
+        || !m.fg(idx - 1)
+        || !m.fg(idx + 1)
+        || !m.fg(idx - sy)
+        || !m.fg(idx + sy)
+        || !m.fg(idx - sz)
+        || !m.fg(idx + sz)
+}
+
+/// Half-open box `[lo, hi)` of voxel indices along x, y, z.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BoundingBox {
+    /// First index along each axis.
+    pub lo: [usize; 3],
+    /// One past the last index along each axis.
+    pub hi: [usize; 3],
+}
+
+impl BoundingBox {
+    /// The smallest box holding both.
+    pub fn union(self, o: BoundingBox) -> BoundingBox {
+        BoundingBox {
+            lo: [0, 1, 2].map(|a| self.lo[a].min(o.lo[a])),
+            hi: [0, 1, 2].map(|a| self.hi[a].max(o.hi[a])),
+        }
+    }
+
+    /// Extent along each axis.
+    pub fn dims(&self) -> [usize; 3] {
+        [0, 1, 2].map(|a| self.hi[a] - self.lo[a])
+    }
+}
+
+/// The bounding box of the foreground of `m` (which is also the bounding box of
+/// its border voxels: the extreme voxels along each axis are border voxels), or
+/// `None` when the mask is empty. One parallel pass over z-slabs.
+pub fn bounding_box<M: MaskView>(m: &M) -> Option<BoundingBox> {
+    let [nx, ny, nz] = m.dims();
+    (0..nz)
+        .into_par_iter()
+        .filter_map(|k| {
+            let mut bb: Option<BoundingBox> = None;
+            for j in 0..ny {
+                let base = nx * (j + ny * k);
+                let Some(first) = (0..nx).find(|&i| m.fg(base + i)) else {
+                    continue;
+                };
+                let last = (first..nx).rev().find(|&i| m.fg(base + i)).unwrap_or(first);
+                let row = BoundingBox {
+                    lo: [first, j, k],
+                    hi: [last + 1, j + 1, k + 1],
+                };
+                bb = Some(bb.map_or(row, |b| b.union(row)));
+            }
+            bb
+        })
+        .reduce_with(BoundingBox::union)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn border_of_a_cube_and_image_edges() {
+        // A 3x3x3 cube inside 5x5x5: all but the centre voxel are border.
+        let d = [5, 5, 5];
+        let mut data = vec![0u8; 125];
+        for k in 1..4 {
+            for j in 1..4 {
+                for i in 1..4 {
+                    data[i + 5 * (j + 5 * k)] = 1;
+                }
+            }
+        }
+        let m = EqualTo {
+            data: &data,
+            dims: d,
+            value: 1,
+        };
+        let n = (0..125)
+            .filter(|&x| is_border(&m, x % 5, (x / 5) % 5, x / 25))
+            .count();
+        assert_eq!(n, 26);
+        assert!(!is_border(&m, 2, 2, 2));
+        assert_eq!(
+            bounding_box(&m),
+            Some(BoundingBox {
+                lo: [1, 1, 1],
+                hi: [4, 4, 4]
+            })
+        );
+        // A full volume: only the image faces are border.
+        let full = vec![1u8; 125];
+        let m = EqualTo {
+            data: &full,
+            dims: d,
+            value: 1,
+        };
+        let n = (0..125)
+            .filter(|&x| is_border(&m, x % 5, (x / 5) % 5, x / 25))
+            .count();
+        assert_eq!(n, 125 - 27);
+        let empty = vec![0u8; 125];
+        assert_eq!(
+            bounding_box(&EqualTo {
+                data: &empty,
+                dims: d,
+                value: 1
+            }),
+            None
+        );
+    }
+}

@@ -1,0 +1,268 @@
+//! Segmentation metrics of a segmentation against a ground truth: voxel overlap
+//! (confusion matrix, Dice, Jaccard, ...), physical volumes, and exact distances
+//! between border voxels (Hausdorff, HD95, ASSD, NSD).
+//!
+//! Conventions follow the medpy/MONAI border-voxel definition (see
+//! `docs/metrics.md` for every definition and how other libraries differ):
+//!
+//! * border voxels are foreground voxels with a 6-neighbour outside the mask, the
+//!   outside of the image counting as background;
+//! * distances are exact Euclidean distances between voxel centres in the
+//!   volume's physical units;
+//! * percentiles interpolate linearly like numpy;
+//! * a ratio whose denominator is 0 is `None` (JSON `null`), and every distance is
+//!   `None` when either mask is empty.
+//!
+//! Everything runs directly on the label arrays (no masks are allocated) and in
+//! parallel with rayon.
+use crate::{CoreError, Geometry, LabelVolume, Mask};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+pub mod border;
+pub mod overlap;
+pub mod stats;
+pub mod surface;
+
+pub use border::{BoundingBox, EqualTo, MaskView};
+pub use overlap::{Confusion, LabelHistograms, confusion_of};
+pub use surface::SurfaceDistances;
+
+/// The default NSD tolerance: 1.0 physical unit.
+pub const DEFAULT_TOLERANCE: f64 = 1.0;
+
+/// Every metric of one label. Serialised with the keys of the `evaluate --json`
+/// contract; `None` is `null`. Distances are in `unit`, volumes in `unit`³.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// True positives (voxels).
+    pub tp: u64,
+    /// False positives (voxels).
+    pub fp: u64,
+    /// False negatives (voxels).
+    #[serde(rename = "fn")]
+    pub fn_: u64,
+    /// True negatives (voxels).
+    pub tn: u64,
+    /// 2TP / (2TP + FP + FN).
+    pub dice: Option<f64>,
+    /// TP / (TP + FP + FN).
+    pub jaccard: Option<f64>,
+    /// TP / (TP + FN).
+    pub sensitivity: Option<f64>,
+    /// TN / (TN + FP).
+    pub specificity: Option<f64>,
+    /// TP / (TP + FP).
+    pub precision: Option<f64>,
+    /// 1 − |FN − FP| / (2TP + FP + FN).
+    pub volume_similarity: Option<f64>,
+    /// Physical volume of the ground truth (voxels × sx·sy·sz).
+    pub volume_gt: f64,
+    /// Physical volume of the segmentation.
+    pub volume_seg: f64,
+    /// Hausdorff distance between the border voxels.
+    pub hd: Option<f64>,
+    /// Max of the two directed 95th percentiles.
+    pub hd95: Option<f64>,
+    /// 95th percentile of both directions pooled.
+    pub hd95_pooled: Option<f64>,
+    /// Mean of both directions' distances pooled.
+    pub assd: Option<f64>,
+    /// Mean of the two directed means.
+    pub masd: Option<f64>,
+    /// Share of border voxels (both masks) within `tolerance` of the other border.
+    pub nsd: Option<f64>,
+    /// The NSD tolerance used, in `unit`.
+    pub tolerance: f64,
+    /// Length unit of distances ("µm", "mm", ...); volumes are in this unit cubed.
+    pub unit: String,
+    /// Border voxels of the ground truth.
+    pub border_gt: u64,
+    /// Border voxels of the segmentation.
+    pub border_seg: u64,
+    /// Largest ground truth → segmentation border distance.
+    pub hd_gt_to_seg: Option<f64>,
+    /// Largest segmentation → ground truth border distance.
+    pub hd_seg_to_gt: Option<f64>,
+    /// 95th percentile of the ground truth → segmentation distances.
+    pub hd95_gt_to_seg: Option<f64>,
+    /// 95th percentile of the segmentation → ground truth distances.
+    pub hd95_seg_to_gt: Option<f64>,
+    /// Mean ground truth → segmentation distance.
+    pub mean_gt_to_seg: Option<f64>,
+    /// Mean segmentation → ground truth distance.
+    pub mean_seg_to_gt: Option<f64>,
+}
+
+impl Metrics {
+    /// Assemble the metrics from the confusion matrix and the surface distances.
+    pub fn new(c: Confusion, s: SurfaceDistances, geometry: &Geometry, tolerance: f64) -> Metrics {
+        let vox = geometry.voxel_volume();
+        Metrics {
+            tp: c.tp,
+            fp: c.fp,
+            fn_: c.fn_,
+            tn: c.tn,
+            dice: c.dice(),
+            jaccard: c.jaccard(),
+            sensitivity: c.sensitivity(),
+            specificity: c.specificity(),
+            precision: c.precision(),
+            volume_similarity: c.volume_similarity(),
+            volume_gt: c.gt_voxels() as f64 * vox,
+            volume_seg: c.seg_voxels() as f64 * vox,
+            hd: s.hd,
+            hd95: s.hd95,
+            hd95_pooled: s.hd95_pooled,
+            assd: s.assd,
+            masd: s.masd,
+            nsd: s.nsd,
+            tolerance,
+            unit: geometry.unit.symbol().to_string(),
+            border_gt: s.border_gt,
+            border_seg: s.border_seg,
+            hd_gt_to_seg: s.hd_gt_to_seg,
+            hd_seg_to_gt: s.hd_seg_to_gt,
+            hd95_gt_to_seg: s.hd95_gt_to_seg,
+            hd95_seg_to_gt: s.hd95_seg_to_gt,
+            mean_gt_to_seg: s.mean_gt_to_seg,
+            mean_seg_to_gt: s.mean_seg_to_gt,
+        }
+    }
+
+    /// The confusion matrix.
+    pub fn confusion(&self) -> Confusion {
+        Confusion {
+            tp: self.tp,
+            fp: self.fp,
+            fn_: self.fn_,
+            tn: self.tn,
+        }
+    }
+}
+
+fn check_tolerance(tolerance: f64) -> Result<(), CoreError> {
+    if tolerance.is_finite() && tolerance >= 0.0 {
+        Ok(())
+    } else {
+        Err(CoreError::Invalid(format!(
+            "tolerance must be a finite number >= 0, got {tolerance}"
+        )))
+    }
+}
+
+/// Metrics of the voxels of `seg` equal to `label` against those of `gt`.
+/// Errs when the two volumes are not on the same grid or `tolerance` (the NSD
+/// tolerance, physical units) is negative or not finite.
+pub fn evaluate_label(
+    gt: &LabelVolume,
+    seg: &LabelVolume,
+    label: u16,
+    tolerance: f64,
+) -> Result<Metrics, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    check_tolerance(tolerance)?;
+    let c = confusion_of(gt.data(), seg.data(), label);
+    Ok(evaluate_views(
+        gt.geometry(),
+        gt.data(),
+        seg.data(),
+        label,
+        c,
+        tolerance,
+    ))
+}
+
+/// Metrics of two binary masks.
+pub fn evaluate_masks(gt: &Mask, seg: &Mask, tolerance: f64) -> Result<Metrics, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    check_tolerance(tolerance)?;
+    let c = confusion_of(gt.data(), seg.data(), true);
+    Ok(evaluate_views(
+        gt.geometry(),
+        gt.data(),
+        seg.data(),
+        true,
+        c,
+        tolerance,
+    ))
+}
+
+/// Metrics of every non-zero label present in either volume. The voxel counts of
+/// all labels come from one pass; the distances of each label are computed one
+/// label after the other (each in parallel), which bounds memory at 512³.
+pub fn evaluate_all(
+    gt: &LabelVolume,
+    seg: &LabelVolume,
+    tolerance: f64,
+) -> Result<BTreeMap<u16, Metrics>, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    check_tolerance(tolerance)?;
+    let h = LabelHistograms::count(gt.data(), seg.data());
+    Ok(h.labels()
+        .into_iter()
+        .map(|l| {
+            let m = evaluate_views(
+                gt.geometry(),
+                gt.data(),
+                seg.data(),
+                l,
+                h.confusion(l),
+                tolerance,
+            );
+            (l, m)
+        })
+        .collect())
+}
+
+/// Only the confusion matrix of `label` (Dice, Jaccard, ... via its methods):
+/// one pass over both volumes, for callers that evaluate many segmentations.
+pub fn overlap_only(
+    gt: &LabelVolume,
+    seg: &LabelVolume,
+    label: u16,
+) -> Result<Confusion, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    Ok(confusion_of(gt.data(), seg.data(), label))
+}
+
+/// Only the confusion matrix of two binary masks.
+pub fn overlap_masks(gt: &Mask, seg: &Mask) -> Result<Confusion, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    Ok(confusion_of(gt.data(), seg.data(), true))
+}
+
+fn evaluate_views<T: Copy + PartialEq + Sync>(
+    geometry: &Geometry,
+    gt: &[T],
+    seg: &[T],
+    value: T,
+    c: Confusion,
+    tolerance: f64,
+) -> Metrics {
+    let dims = geometry.dims;
+    let g = EqualTo {
+        data: gt,
+        dims,
+        value,
+    };
+    let s = EqualTo {
+        data: seg,
+        dims,
+        value,
+    };
+    let bb = match (c.gt_voxels() > 0, c.seg_voxels() > 0) {
+        (false, false) => None,
+        (true, false) => border::bounding_box(&g),
+        (false, true) => border::bounding_box(&s),
+        (true, true) => {
+            let (a, b) = rayon::join(|| border::bounding_box(&g), || border::bounding_box(&s));
+            a.zip(b).map(|(a, b)| a.union(b))
+        }
+    };
+    let sd = surface::surface_distances(&g, &s, bb, geometry.spacing, tolerance);
+    Metrics::new(c, sd, geometry, tolerance)
+}
+
+#[cfg(test)]
+mod tests;

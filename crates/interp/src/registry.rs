@@ -1,0 +1,55 @@
+//! The list of interpolators, by `--method` name. The default comes first.
+use crate::{InterpError, Interpolator};
+
+/// The method used when none is named; chosen by the study on the phantom
+/// (see `docs/interpolation.md`).
+pub const DEFAULT_METHOD: &str = "shape-aligned";
+
+/// Every interpolator, the default first.
+pub fn methods() -> Vec<Box<dyn Interpolator>> {
+    let mut all: Vec<Box<dyn Interpolator>> = vec![
+        Box::new(crate::shape_based::ShapeBased),
+        Box::new(crate::shape_cubic::ShapeCubic),
+        Box::new(crate::linear::Linear),
+        Box::new(crate::aligned::ShapeAligned::default()),
+    ];
+    if let Some(p) = all.iter().position(|m| m.name() == DEFAULT_METHOD) {
+        let d = all.remove(p);
+        all.insert(0, d);
+    }
+    all
+}
+
+/// The interpolator named `name`; an unknown name is an error listing the
+/// valid ones.
+pub fn by_name(name: &str) -> Result<Box<dyn Interpolator>, InterpError> {
+    let all = methods();
+    let names: Vec<&'static str> = all.iter().map(|m| m.name()).collect();
+    all.into_iter().find(|m| m.name() == name).ok_or_else(|| {
+        InterpError::Input(format!("unknown method '{name}' (valid: {})", names.join(", ")))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_first_and_names_unique() {
+        let all = methods();
+        assert_eq!(all[0].name(), DEFAULT_METHOD);
+        let mut names: Vec<_> = all.iter().map(|m| m.name()).collect();
+        names.sort_unstable();
+        let n = names.len();
+        names.dedup();
+        assert_eq!(names.len(), n);
+        assert!(all.iter().all(|m| !m.description().is_empty()));
+    }
+
+    #[test]
+    fn unknown_name_lists_the_valid_ones() {
+        let e = by_name("nope").err().expect("unknown method").to_string();
+        assert!(e.contains("nope") && e.contains("shape-based") && e.contains("linear"), "{e}");
+        assert_eq!(by_name("linear").unwrap().name(), "linear");
+    }
+}

@@ -1,0 +1,120 @@
+//! Slice plumbing shared by the slice-wise methods: reading the drawn slices
+//! and assembling a volume from per-slice results without holding the volume
+//! twice along the fast axis.
+use crate::SparseMask;
+use interslice_core::{Axis, Mask, Volume};
+use rayon::prelude::*;
+
+/// The in-slice shape `(width, height)` and physical spacing `[su, sv]` of
+/// slices along the input's axis, and the spacing between slices.
+#[derive(Debug, Clone, Copy)]
+pub struct Plane {
+    /// Pixels along u.
+    pub width: usize,
+    /// Pixels along v.
+    pub height: usize,
+    /// Physical pixel size along u and v.
+    pub spacing: [f64; 2],
+    /// Physical distance between consecutive slices.
+    pub slice_spacing: f64,
+}
+
+impl Plane {
+    /// The plane of slices along `input.axis`.
+    pub fn of(input: &SparseMask<'_>) -> Plane {
+        let (a, b) = input.axis.in_plane();
+        let g = input.mask.geometry();
+        Plane {
+            width: g.dims[a],
+            height: g.dims[b],
+            spacing: [g.spacing[a], g.spacing[b]],
+            slice_spacing: g.spacing[input.axis.dim()],
+        }
+    }
+
+    /// Pixels per slice.
+    pub fn len(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// True for a plane without pixels (never for a validated geometry).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The drawn slices of the input as row-major buffers, read in parallel.
+pub fn drawn_slices(input: &SparseMask<'_>) -> Vec<Vec<bool>> {
+    input
+        .drawn
+        .par_iter()
+        .map(|&d| input.mask.slice(input.axis, d).expect("validated drawn index"))
+        .collect()
+}
+
+/// Build the output mask: drawn slices copied from the input, every other
+/// slice from `produce(index)` (`None` = empty). Slices are produced in
+/// parallel; along z they are written in place, along x and y collected first
+/// and then scattered in parallel over z-planes.
+pub fn assemble(input: &SparseMask<'_>, produce: impl Fn(usize) -> Option<Vec<bool>> + Sync) -> Mask {
+    let geometry = input.mask.geometry().clone();
+    let axis = input.axis;
+    let n = input.mask.slice_count(axis);
+    let mut is_drawn = vec![false; n];
+    for &d in input.drawn {
+        is_drawn[d] = true;
+    }
+    let [nx, ny, _] = geometry.dims;
+    let src = input.mask.data();
+    let mut out: Mask = Volume::zeros(geometry);
+    match axis {
+        Axis::Z => {
+            let plane = nx * ny;
+            out.data_mut().par_chunks_mut(plane).enumerate().for_each(|(k, chunk)| {
+                if is_drawn[k] {
+                    chunk.copy_from_slice(&src[k * plane..(k + 1) * plane]);
+                } else if let Some(s) = produce(k) {
+                    chunk.copy_from_slice(&s);
+                }
+            });
+        }
+        Axis::X | Axis::Y => {
+            let slices: Vec<Option<Vec<bool>>> = (0..n)
+                .into_par_iter()
+                .map(|s| if is_drawn[s] { None } else { produce(s) })
+                .collect();
+            out.data_mut().par_chunks_mut(nx * ny).enumerate().for_each(|(k, chunk)| {
+                let base = k * nx * ny;
+                for j in 0..ny {
+                    for i in 0..nx {
+                        let idx = i + nx * j;
+                        let (s, u, v) = axis.split([i, j, k]);
+                        chunk[idx] = if is_drawn[s] {
+                            src[base + idx]
+                        } else {
+                            match &slices[s] {
+                                Some(buf) => {
+                                    let w = if axis == Axis::X { ny } else { nx };
+                                    buf[u + w * v]
+                                }
+                                None => false,
+                            }
+                        };
+                    }
+                }
+            });
+        }
+    }
+    out
+}
+
+/// For slice `s`, the pair of consecutive drawn positions `(i, i + 1)` in
+/// `drawn` with `drawn[i] < s < drawn[i + 1]`, or `None` outside the drawn
+/// range (or on a drawn slice).
+pub fn bracket(drawn: &[usize], s: usize) -> Option<usize> {
+    let p = drawn.partition_point(|&d| d < s);
+    if p == 0 || p >= drawn.len() || drawn[p] == s {
+        return None;
+    }
+    Some(p - 1)
+}

@@ -1,0 +1,252 @@
+//! Invariants every registered interpolator must keep, checked generically
+//! over `registry::methods()`, and the accuracy of each on known shapes.
+use interslice_core::{Axis, Geometry, LengthUnit, Mask, Volume};
+use interslice_interp::{SparseMask, methods};
+
+/// A mask from an implicit shape in physical coordinates of voxel centres.
+fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn(f64, f64, f64) -> bool) -> Mask {
+    let g = Geometry::new(dims, spacing, LengthUnit::Micrometre).unwrap();
+    let mut m: Mask = Volume::zeros(g);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let p = [(i as f64 + 0.5) * spacing[0], (j as f64 + 0.5) * spacing[1], (k as f64 + 0.5) * spacing[2]];
+                m.set(i, j, k, inside(p[0], p[1], p[2]));
+            }
+        }
+    }
+    m
+}
+
+fn ellipsoid(c: [f64; 3], r: [f64; 3]) -> impl Fn(f64, f64, f64) -> bool {
+    move |x, y, z| ((x - c[0]) / r[0]).powi(2) + ((y - c[1]) / r[1]).powi(2) + ((z - c[2]) / r[2]).powi(2) <= 1.0
+}
+
+/// Keep only the drawn slices of `full` along `axis`.
+fn sparse(full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
+    let mut m: Mask = Volume::zeros(full.geometry().clone());
+    for &d in drawn {
+        m.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
+    }
+    m
+}
+
+/// Every `step`-th slice from 0, plus the last one.
+fn every(n: usize, step: usize) -> Vec<usize> {
+    let mut d: Vec<usize> = (0..n).step_by(step).collect();
+    if *d.last().unwrap() != n - 1 {
+        d.push(n - 1);
+    }
+    d
+}
+
+fn dice(a: &Mask, b: &Mask) -> f64 {
+    let (mut tp, mut na, mut nb) = (0usize, 0usize, 0usize);
+    for (&x, &y) in a.data().iter().zip(b.data()) {
+        tp += (x && y) as usize;
+        na += x as usize;
+        nb += y as usize;
+    }
+    2.0 * tp as f64 / (na + nb) as f64
+}
+
+/// 4-connected components of a 2D slice.
+fn count_components(s: &[bool], w: usize, h: usize) -> usize {
+    let mut seen = vec![false; s.len()];
+    let mut n = 0;
+    for start in 0..s.len() {
+        if !s[start] || seen[start] {
+            continue;
+        }
+        n += 1;
+        let mut stack = vec![start];
+        seen[start] = true;
+        while let Some(p) = stack.pop() {
+            let (u, v) = (p % w, p / w);
+            let mut push = |q: usize| {
+                if s[q] && !seen[q] {
+                    seen[q] = true;
+                    stack.push(q);
+                }
+            };
+            if u > 0 {
+                push(p - 1);
+            }
+            if u + 1 < w {
+                push(p + 1);
+            }
+            if v > 0 {
+                push(p - w);
+            }
+            if v + 1 < h {
+                push(p + w);
+            }
+        }
+    }
+    n
+}
+
+fn run(method: &dyn interslice_interp::Interpolator, full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
+    let sp = sparse(full, axis, drawn);
+    method
+        .interpolate(SparseMask {
+            mask: &sp,
+            axis,
+            drawn,
+        })
+        .unwrap_or_else(|e| panic!("{}: {e}", method.name()))
+}
+
+/// Minimum Dice from every 5th slice, per method: (ellipsoid, two-lobed nucleus).
+/// Methods not listed (added later) must reach the generic floor.
+const FLOORS: &[(&str, f64, f64)] = &[
+    ("linear", 0.90, 0.85),
+    ("shape-based", 0.93, 0.90),
+    ("shape-cubic", 0.95, 0.91),
+    ("shape-aligned", 0.95, 0.92),
+];
+const GENERIC_FLOOR: f64 = 0.70;
+
+fn floor(name: &str) -> (f64, f64) {
+    FLOORS
+        .iter()
+        .find(|f| f.0 == name)
+        .map(|f| (f.1, f.2))
+        .unwrap_or((GENERIC_FLOOR, GENERIC_FLOOR))
+}
+
+fn test_ellipsoid() -> Mask {
+    shape([36, 32, 40], [1.0, 1.0, 1.0], ellipsoid([18.0, 16.0, 20.0], [14.0, 11.0, 17.0]))
+}
+
+fn two_lobed() -> Mask {
+    // Two overlapping spheres offset in x, y and z: lobes that tilt and merge.
+    let a = ellipsoid([14.0, 14.0, 16.0], [10.0, 9.0, 11.0]);
+    let b = ellipsoid([25.0, 20.0, 24.0], [9.0, 8.0, 10.0]);
+    shape([40, 34, 40], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z))
+}
+
+#[test]
+fn every_method_recovers_an_ellipsoid_and_a_two_lobed_nucleus() {
+    let cases = [("ellipsoid", test_ellipsoid()), ("two-lobed", two_lobed())];
+    let mut report = Vec::new();
+    for m in methods() {
+        let (fe, fl) = floor(m.name());
+        for (i, (name, gt)) in cases.iter().enumerate() {
+            let drawn = every(gt.slice_count(Axis::Z), 5);
+            let out = run(m.as_ref(), gt, Axis::Z, &drawn);
+            let d = dice(&out, gt);
+            report.push(format!("{} {name} {d:.4}", m.name()));
+            let f = if i == 0 { fe } else { fl };
+            assert!(d >= f, "{} on {name}: Dice {d:.4} < {f}", m.name());
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn drawn_slices_are_reproduced_and_drawn_empty_slices_stay_empty() {
+    // An object that is absent on a drawn slice in the middle (two pieces
+    // along z) and whose outermost drawn slices are empty.
+    let a = ellipsoid([14.0, 14.0, 10.0], [9.0, 8.0, 7.0]);
+    let b = ellipsoid([18.0, 15.0, 27.0], [8.0, 9.0, 7.0]);
+    let gt = shape([32, 30, 36], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z));
+    let drawn = vec![0, 5, 9, 14, 18, 23, 28, 31, 35];
+    for m in methods() {
+        let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
+        for &d in &drawn {
+            assert_eq!(
+                out.slice(Axis::Z, d).unwrap(),
+                gt.slice(Axis::Z, d).unwrap(),
+                "{}: drawn slice z={d} changed",
+                m.name()
+            );
+        }
+        for &d in &[0usize, 18, 35] {
+            assert!(gt.slice(Axis::Z, d).unwrap().iter().all(|&x| !x), "test setup: z={d} must be empty");
+        }
+    }
+}
+
+#[test]
+fn every_axis_with_anisotropic_spacing() {
+    // The same physical ellipsoid sampled with 2 µm slices along each axis in turn.
+    for axis in Axis::ALL {
+        let mut spacing = [0.5, 0.5, 0.5];
+        spacing[axis.dim()] = 2.0;
+        let mut dims = [56, 48, 52];
+        dims[axis.dim()] = [14, 12, 13][axis.dim()];
+        let gt = shape(dims, spacing, ellipsoid([14.0, 12.0, 13.0], [10.0, 8.0, 9.0]));
+        let drawn = every(gt.slice_count(axis), 3);
+        for m in methods() {
+            let out = run(m.as_ref(), &gt, axis, &drawn);
+            let d = dice(&out, &gt);
+            let f = floor(m.name()).0 - 0.05;
+            assert!(d >= f, "{} along {axis}: Dice {d:.4} < {f}", m.name());
+            for &k in &drawn {
+                assert_eq!(out.slice(axis, k).unwrap(), gt.slice(axis, k).unwrap(), "{} {axis}={k}", m.name());
+            }
+        }
+    }
+}
+
+#[test]
+fn two_nucleoli_stay_two_objects() {
+    let a = ellipsoid([10.0, 14.0, 12.0], [5.0, 5.0, 8.0]);
+    let b = ellipsoid([23.0, 14.0, 13.0], [5.0, 5.0, 8.0]);
+    let gt = shape([34, 28, 26], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z));
+    let drawn = every(26, 5);
+    for m in methods() {
+        let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
+        for k in [7usize, 12, 13, 17] {
+            let s = out.slice(Axis::Z, k).unwrap();
+            assert_eq!(count_components(&s, 34, 28), 2, "{}: z={k} must show two nucleoli", m.name());
+        }
+    }
+}
+
+#[test]
+fn a_u_shaped_object_is_recovered() {
+    // Two arms along z joined by a bar at the bottom: one blob on low slices,
+    // two on high ones.
+    let gt = shape([40, 20, 40], [1.0, 1.0, 1.0], |x, y, z| {
+        let in_y = (4.0..16.0).contains(&y);
+        let bar = (4.0..36.0).contains(&x) && (4.0..14.0).contains(&z);
+        let arm = ((4.0..14.0).contains(&x) || (26.0..36.0).contains(&x)) && (4.0..36.0).contains(&z);
+        in_y && (bar || arm)
+    });
+    let drawn = every(40, 5);
+    for m in methods() {
+        let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
+        let d = dice(&out, &gt);
+        let f = floor(m.name()).1 - 0.05;
+        assert!(d >= f, "{}: U-shape Dice {d:.4} < {f}", m.name());
+        for k in [21usize, 27, 33] {
+            let s = out.slice(Axis::Z, k).unwrap();
+            assert_eq!(count_components(&s, 40, 20), 2, "{}: z={k} must show both arms", m.name());
+        }
+        for k in [6usize, 8] {
+            let s = out.slice(Axis::Z, k).unwrap();
+            assert_eq!(count_components(&s, 40, 20), 1, "{}: z={k} must show the bar", m.name());
+        }
+    }
+}
+
+#[test]
+fn fewer_than_two_drawn_slices_is_an_error() {
+    let gt = test_ellipsoid();
+    for m in methods() {
+        let e = m.interpolate(SparseMask {
+            mask: &gt,
+            axis: Axis::Z,
+            drawn: &[10],
+        });
+        assert!(e.is_err(), "{} accepted one drawn slice", m.name());
+        let e = m.interpolate(SparseMask {
+            mask: &gt,
+            axis: Axis::Z,
+            drawn: &[10, 400],
+        });
+        assert!(e.is_err(), "{} accepted an out-of-range slice", m.name());
+    }
+}

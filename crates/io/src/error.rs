@@ -1,0 +1,107 @@
+//! The error type of the io crate: every message is one line that names the file.
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// What can go wrong reading or writing a volume file.
+///
+/// Display is always one line and starts with the path, so a command-line
+/// tool can print it as is.
+#[derive(Debug, Error)]
+pub enum IoError {
+    /// The operating system refused to read the file (missing, permissions, ...).
+    #[error("cannot read {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The operating system refused to write the file (or its temporary file).
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file is not a valid file of its format (truncated, inconsistent header, garbage).
+    #[error("{}: {msg}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, one line.
+        msg: String,
+    },
+    /// The file is valid but uses something we do not support (4D data, RGB,
+    /// an unknown encoding, an unknown extension), or a write would lose data.
+    #[error("{}: {msg}", path.display())]
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// What is not supported, one line.
+        msg: String,
+    },
+}
+
+impl IoError {
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            IoError::Read { path, .. }
+            | IoError::Write { path, .. }
+            | IoError::Invalid { path, .. }
+            | IoError::Unsupported { path, .. } => path,
+        }
+    }
+
+    pub(crate) fn invalid(path: &Path, msg: impl Into<String>) -> IoError {
+        IoError::Invalid {
+            path: path.to_path_buf(),
+            msg: one_line(msg.into()),
+        }
+    }
+
+    pub(crate) fn unsupported(path: &Path, msg: impl Into<String>) -> IoError {
+        IoError::Unsupported {
+            path: path.to_path_buf(),
+            msg: one_line(msg.into()),
+        }
+    }
+
+    pub(crate) fn read(path: &Path, source: std::io::Error) -> IoError {
+        // A decoder that runs out of input reports UnexpectedEof: that is a
+        // truncated file, not an operating-system failure.
+        if source.kind() == std::io::ErrorKind::UnexpectedEof {
+            return IoError::invalid(path, "file is truncated (unexpected end of data)");
+        }
+        if source.kind() == std::io::ErrorKind::InvalidData
+            || source.kind() == std::io::ErrorKind::InvalidInput
+        {
+            return IoError::invalid(path, format!("corrupt data: {source}"));
+        }
+        IoError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    pub(crate) fn write(path: &Path, source: std::io::Error) -> IoError {
+        IoError::Write {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// Collapse line breaks so a message from a library stays on one line.
+fn one_line(s: String) -> String {
+    if s.contains(['\n', '\r']) {
+        s.split(['\n', '\r'])
+            .map(str::trim)
+            .filter(|p| !p.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ")
+    } else {
+        s
+    }
+}

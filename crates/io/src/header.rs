@@ -1,0 +1,67 @@
+//! Helpers shared by the text-header formats (NRRD, MetaImage): bounded
+//! line reading and geometry assembly from per-axis vectors.
+use crate::IoError;
+use interslice_core::{Geometry, LengthUnit};
+use std::io::BufRead;
+use std::path::Path;
+
+/// Longest text header we accept before deciding the file is not one.
+pub const MAX_HEADER: usize = 1 << 20;
+
+/// Read one line (without the line ending) of at most [`MAX_HEADER`] bytes;
+/// `None` at end of file. `consumed` counts the bytes read, line ending included.
+pub fn read_line<R: BufRead + ?Sized>(path: &Path, r: &mut R, consumed: &mut usize) -> Result<Option<String>, IoError> {
+    let mut buf = Vec::new();
+    let n = std::io::Read::take(&mut *r, (MAX_HEADER + 1) as u64)
+        .read_until(b'\n', &mut buf)
+        .map_err(|e| IoError::read(path, e))?;
+    if n == 0 {
+        return Ok(None);
+    }
+    *consumed += n;
+    if *consumed > MAX_HEADER {
+        return Err(IoError::invalid(path, "header is too long (is this a text header at all?)"));
+    }
+    if buf.last() == Some(&b'\n') {
+        buf.pop();
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    String::from_utf8(buf)
+        .map(Some)
+        .map_err(|_| IoError::invalid(path, "header is not text"))
+}
+
+/// Geometry from per-axis direction vectors whose lengths are the spacings
+/// (NRRD `space directions`, or ITK direction columns × spacing).
+pub fn geometry_from_axes(
+    path: &Path,
+    dims: [usize; 3],
+    axes: [[f64; 3]; 3],
+    origin: [f64; 3],
+    unit: LengthUnit,
+) -> Result<Geometry, IoError> {
+    let mut spacing = [0.0; 3];
+    let mut direction = [[0.0; 3]; 3];
+    for c in 0..3 {
+        let v = axes[c];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if !(n.is_finite() && n > 0.0) {
+            return Err(IoError::invalid(path, format!("axis {c} has a zero or invalid direction vector {v:?}")));
+        }
+        spacing[c] = n;
+        for r in 0..3 {
+            direction[r][c] = v[r] / n + 0.0;
+        }
+    }
+    let g = Geometry { dims, spacing, unit, origin, direction };
+    g.validate().map_err(|e| IoError::invalid(path, e.to_string()))?;
+    Ok(g)
+}
+
+/// Format a float so it reads back exactly (Rust's shortest round-trip form).
+pub fn num(x: f64) -> String {
+    let x = x + 0.0; // no "-0"
+    format!("{x}")
+}

@@ -1,0 +1,390 @@
+//! NRRD (`.nrrd` with attached data, `.nhdr` with a detached data file).
+//!
+//! The header is parsed here (no well-kept Rust crate reads NRRD). Read:
+//! encodings `raw`, `gzip`/`gz` and `ascii`/`text`; anything else is refused
+//! by name. Geometry: `space directions` give spacing (vector lengths) and
+//! direction (unit vectors), `space origin` the origin; an RAS or LAS `space`
+//! is turned into LPS (ITK's convention, like SimpleITK). Without `space`,
+//! `spacings` (and optional `axis mins`) are used with identity direction.
+//! 3D Slicer segmentations (`.seg.nrrd`) are read as their labelmap: a 3D
+//! file as is, a 4D file with one layer (first axis of kind `list` with size
+//! 1) squeezed to 3D; several layers (overlapping segments) are refused.
+//! Write: `NRRD0004`, gzip, `space: left-posterior-superior`,
+//! `space directions`, `space origin`, `space units`.
+use crate::header::{self, num};
+use crate::raw::{self, Endian, RawType};
+use crate::IoError;
+use interslice_core::{AnyVolume, LengthUnit};
+use std::collections::HashMap;
+use std::io::{BufRead, Read, Write};
+use std::path::{Path, PathBuf};
+
+fn raw_type(path: &Path, s: &str) -> Result<RawType, IoError> {
+    Ok(match s.trim() {
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => RawType::U8,
+        "signed char" | "int8" | "int8_t" => RawType::I8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => RawType::I16,
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => RawType::U16,
+        "int" | "signed int" | "int32" | "int32_t" => RawType::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => RawType::U32,
+        "float" => RawType::F32,
+        "double" => RawType::F64,
+        other => return Err(IoError::unsupported(path, format!("NRRD type '{other}' is not supported"))),
+    })
+}
+
+fn type_name(t: RawType) -> &'static str {
+    match t {
+        RawType::U8 => "unsigned char",
+        RawType::I8 => "signed char",
+        RawType::U16 => "unsigned short",
+        RawType::I16 => "short",
+        RawType::U32 => "unsigned int",
+        RawType::I32 => "int",
+        RawType::F32 => "float",
+        RawType::F64 => "double",
+    }
+}
+
+/// Parse "(a,b,c)" into a vector, or None for "none".
+fn vector(path: &Path, s: &str) -> Result<Option<[f64; 3]>, IoError> {
+    let s = s.trim();
+    if s == "none" {
+        return Ok(None);
+    }
+    let inner = s
+        .strip_prefix('(')
+        .and_then(|x| x.strip_suffix(')'))
+        .ok_or_else(|| IoError::invalid(path, format!("bad NRRD vector '{s}'")))?;
+    let parts: Vec<f64> = inner
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| IoError::invalid(path, format!("bad NRRD vector '{s}'")))?;
+    match parts.as_slice() {
+        [a, b, c] => Ok(Some([*a, *b, *c])),
+        _ => Err(IoError::unsupported(path, format!("NRRD vector '{s}' is not 3D"))),
+    }
+}
+
+/// Split "(a,b,c) none (d,e,f)" into its items.
+fn vector_items(s: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut depth = 0;
+    for ch in s.chars() {
+        match ch {
+            '(' => {
+                depth += 1;
+                cur.push(ch);
+            }
+            ')' => {
+                depth -= 1;
+                cur.push(ch);
+            }
+            c if c.is_whitespace() && depth == 0 => {
+                if !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                }
+            }
+            c => cur.push(c),
+        }
+    }
+    if !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+/// Strip the quotes of `"mm" "mm" "mm"`.
+fn quoted_items(s: &str) -> Vec<String> {
+    let items: Vec<String> = s.split('"').map(str::trim).filter(|x| !x.is_empty()).map(String::from).collect();
+    if items.is_empty() { s.split_whitespace().map(String::from).collect() } else { items }
+}
+
+/// Read a NRRD file.
+pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
+    let mut r = raw::open(path)?;
+    let mut consumed = 0usize;
+    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
+    if !first.starts_with("NRRD000") {
+        return Err(IoError::invalid(path, "not a NRRD file (no NRRD000x magic line)"));
+    }
+    let mut fields: HashMap<String, String> = HashMap::new();
+    let mut keys: HashMap<String, String> = HashMap::new();
+    loop {
+        let Some(line) = header::read_line(path, &mut r, &mut consumed)? else {
+            break; // end of file: a detached header may have no blank line
+        };
+        if line.is_empty() {
+            break;
+        }
+        if line.starts_with('#') {
+            continue;
+        }
+        if let Some((k, v)) = line.split_once(":=") {
+            keys.insert(k.trim().to_string(), v.trim().to_string());
+        } else if let Some((k, v)) = line.split_once(": ") {
+            fields.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+        } else if let Some(k) = line.strip_suffix(':') {
+            fields.insert(k.trim().to_ascii_lowercase(), String::new());
+        } else {
+            return Err(IoError::invalid(path, format!("bad NRRD header line '{line}'")));
+        }
+    }
+    let get = |k: &str| fields.get(k).map(String::as_str);
+    let need = |k: &str| get(k).ok_or_else(|| IoError::invalid(path, format!("NRRD header has no '{k}' field")));
+
+    let t = raw_type(path, need("type")?)?;
+    let dimension: usize = need("dimension")?
+        .parse()
+        .map_err(|_| IoError::invalid(path, "bad NRRD 'dimension'"))?;
+    let sizes: Vec<usize> = need("sizes")?
+        .split_whitespace()
+        .map(|s| s.parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| IoError::invalid(path, "bad NRRD 'sizes'"))?;
+    if sizes.len() != dimension {
+        return Err(IoError::invalid(path, format!("NRRD 'sizes' has {} values for dimension {dimension}", sizes.len())));
+    }
+    let kinds: Vec<String> = get("kinds").map(|k| k.split_whitespace().map(str::to_ascii_lowercase).collect()).unwrap_or_default();
+    // Which axes are spatial: a leading non-spatial axis of size 1 (a
+    // single-layer Slicer segmentation, a 1-component list) is squeezed.
+    let dir_items: Vec<String> = get("space directions").map(vector_items).unwrap_or_default();
+    let first_is_list = dimension == 4
+        && (kinds.first().is_some_and(|k| !matches!(k.as_str(), "domain" | "space"))
+            || dir_items.first().is_some_and(|d| d == "none"));
+    let (skip, spatial) = match dimension {
+        1..=3 => (0usize, dimension),
+        4 if first_is_list => {
+            if sizes[0] != 1 {
+                let what = if keys.contains_key("Segment0_Layer") || keys.keys().any(|k| k.starts_with("Segmentation_")) {
+                    format!(
+                        "3D Slicer segmentation with {} layers (overlapping segments) is not supported; export it as a labelmap",
+                        sizes[0]
+                    )
+                } else {
+                    format!("a 4D NRRD with {} components per voxel is not supported", sizes[0])
+                };
+                return Err(IoError::unsupported(path, what));
+            }
+            (1, 3)
+        }
+        _ => return Err(IoError::unsupported(path, format!("{dimension}D NRRD files are not supported (3D only)"))),
+    };
+    let mut dims = [1usize; 3];
+    dims[..spatial].copy_from_slice(&sizes[skip..skip + spatial]);
+    let nbytes = raw::checked_bytes(path, dims, t)?;
+
+    let endian = match get("endian") {
+        Some("big") => Endian::Big,
+        Some("little") | None => Endian::Little,
+        Some(other) => return Err(IoError::invalid(path, format!("bad NRRD endian '{other}'"))),
+    };
+
+    // Geometry.
+    let space = get("space").map(str::to_ascii_lowercase);
+    let units: Vec<String> = get("space units").map(quoted_items).unwrap_or_default();
+    let unit = match units.first() {
+        Some(u) => LengthUnit::parse(u).unwrap_or(LengthUnit::Unknown),
+        None => LengthUnit::Millimetre,
+    };
+    let geometry = if let Some(space) = space.as_deref().or(get("space dimension").map(|_| "")) {
+        let flips: [f64; 3] = match space {
+            "right-anterior-superior" | "ras" => [-1.0, -1.0, 1.0],
+            "left-anterior-superior" | "las" => [1.0, -1.0, 1.0],
+            _ => [1.0; 3],
+        };
+        let items = &dir_items;
+        if items.len() != dimension {
+            return Err(IoError::invalid(
+                path,
+                format!("NRRD 'space directions' has {} items for dimension {dimension}", items.len()),
+            ));
+        }
+        let mut axes = [[0.0; 3]; 3];
+        for a in 0..3 {
+            if a < spatial {
+                let v = vector(path, &items[skip + a])?
+                    .ok_or_else(|| IoError::invalid(path, format!("space direction of axis {} is 'none'", skip + a)))?;
+                axes[a] = [v[0] * flips[0], v[1] * flips[1], v[2] * flips[2]];
+            } else {
+                axes[a][a] = 1.0;
+            }
+        }
+        let origin = match get("space origin") {
+            Some(o) => {
+                let v = vector(path, o)?.unwrap_or([0.0; 3]);
+                [v[0] * flips[0] + 0.0, v[1] * flips[1] + 0.0, v[2] * flips[2] + 0.0]
+            }
+            None => [0.0; 3],
+        };
+        header::geometry_from_axes(path, dims, axes, origin, unit)?
+    } else {
+        // No space: per-axis spacings (NaN for non-spatial axes).
+        let mut axes = [[0.0; 3]; 3];
+        let sp: Vec<f64> = get("spacings")
+            .map(|s| s.split_whitespace().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect())
+            .unwrap_or_default();
+        let mins: Vec<f64> = get("axis mins")
+            .map(|s| s.split_whitespace().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect())
+            .unwrap_or_default();
+        let mut origin = [0.0; 3];
+        for a in 0..3 {
+            let s = sp.get(skip + a).copied().filter(|s| s.is_finite() && *s > 0.0).unwrap_or(1.0);
+            axes[a][a] = s;
+            if let Some(m) = mins.get(skip + a).filter(|m| m.is_finite()) {
+                origin[a] = *m;
+            }
+        }
+        let unit = if units.is_empty() { LengthUnit::Unknown } else { unit };
+        header::geometry_from_axes(path, dims, axes, origin, unit)?
+    };
+
+    let encoding = need("encoding")?.to_ascii_lowercase();
+    let byte_skip: i64 = get("byte skip").map(|s| s.trim().parse().unwrap_or(0)).unwrap_or(0);
+    let line_skip: usize = get("line skip").map(|s| s.trim().parse().unwrap_or(0)).unwrap_or(0);
+
+    // The data stream: attached (rest of this file) or detached.
+    let data_path: Option<PathBuf> = match get("data file").or(get("datafile")) {
+        Some(f) => {
+            let f = f.trim();
+            if f.starts_with("LIST") || f.split_whitespace().count() > 1 {
+                return Err(IoError::unsupported(path, "NRRD with several data files is not supported"));
+            }
+            let p = Path::new(f);
+            Some(if p.is_absolute() { p.to_path_buf() } else { path.parent().unwrap_or(Path::new(".")).join(p) })
+        }
+        None => None,
+    };
+    let (mut reader, data_len): (Box<dyn BufRead>, u64) = match &data_path {
+        Some(p) => {
+            let len = std::fs::metadata(p).map_err(|e| IoError::read(p, e))?.len();
+            (Box::new(raw::open(p)?), len)
+        }
+        None => {
+            let len = std::fs::metadata(path).map_err(|e| IoError::read(path, e))?.len();
+            (Box::new(r), len.saturating_sub(consumed as u64))
+        }
+    };
+    let data_name: &Path = data_path.as_deref().unwrap_or(path);
+    let mut skipped = 0usize;
+    for _ in 0..line_skip {
+        if header::read_line(data_name, &mut reader, &mut skipped)?.is_none() {
+            return Err(IoError::invalid(data_name, "file is truncated (line skip past the end)"));
+        }
+    }
+    let bytes = match encoding.as_str() {
+        "raw" => {
+            let skip_bytes = if byte_skip == -1 {
+                (data_len - skipped as u64).checked_sub(nbytes as u64).ok_or_else(|| {
+                    IoError::invalid(data_name, format!("file is truncated: dims {dims:?} need {nbytes} bytes of data"))
+                })?
+            } else {
+                byte_skip.max(0) as u64
+            };
+            if data_len < skipped as u64 + skip_bytes + nbytes as u64 {
+                return Err(IoError::invalid(
+                    data_name,
+                    format!(
+                        "file is truncated: dims {dims:?} need {nbytes} bytes of data, {} are there",
+                        data_len.saturating_sub(skipped as u64 + skip_bytes)
+                    ),
+                ));
+            }
+            std::io::copy(&mut (&mut reader).take(skip_bytes), &mut std::io::sink()).map_err(|e| IoError::read(data_name, e))?;
+            raw::read_exact_bounded(data_name, &mut reader, nbytes)?
+        }
+        "gzip" | "gz" => {
+            let mut dec = flate2::read::MultiGzDecoder::new(reader);
+            if byte_skip > 0 {
+                std::io::copy(&mut (&mut dec).take(byte_skip as u64), &mut std::io::sink()).map_err(|e| IoError::read(data_name, e))?;
+            }
+            raw::read_exact_bounded(data_name, &mut dec, nbytes)?
+        }
+        "ascii" | "text" | "txt" => {
+            // Each value takes at least two characters: bound the text read.
+            let limit = (geometry.len() as u64).saturating_mul(64);
+            let mut text = String::new();
+            reader
+                .take(limit)
+                .read_to_string(&mut text)
+                .map_err(|e| IoError::read(data_name, e))?;
+            ascii_to_bytes(data_name, &text, t, geometry.len())?
+        }
+        other => {
+            return Err(IoError::unsupported(
+                path,
+                format!("NRRD encoding '{other}' is not supported (use raw, gzip or ascii)"),
+            ));
+        }
+    };
+    let endian = if encoding.starts_with('a') || encoding.starts_with('t') { Endian::Little } else { endian };
+    raw::decode_volume(data_name, geometry, t, endian, &bytes)
+}
+
+fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u8>, IoError> {
+    let mut out = Vec::with_capacity(n * t.size());
+    let mut count = 0usize;
+    for tok in text.split_whitespace().take(n) {
+        let x: f64 = tok.parse().map_err(|_| IoError::invalid(path, format!("bad number '{tok}' in ASCII data")))?;
+        let ok_int = |lo: f64, hi: f64| x.fract() == 0.0 && x >= lo && x <= hi;
+        let bad = || IoError::invalid(path, format!("value {tok} does not fit the NRRD type"));
+        match t {
+            RawType::U8 if ok_int(0.0, 255.0) => out.push(x as u8),
+            RawType::I8 if ok_int(-128.0, 127.0) => out.push(x as i8 as u8),
+            RawType::U16 if ok_int(0.0, 65535.0) => out.extend_from_slice(&(x as u16).to_le_bytes()),
+            RawType::I16 if ok_int(-32768.0, 32767.0) => out.extend_from_slice(&(x as i16).to_le_bytes()),
+            RawType::U32 if ok_int(0.0, 4294967295.0) => out.extend_from_slice(&(x as u32).to_le_bytes()),
+            RawType::I32 if ok_int(-2147483648.0, 2147483647.0) => out.extend_from_slice(&(x as i32).to_le_bytes()),
+            RawType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
+            RawType::F64 => out.extend_from_slice(&x.to_le_bytes()),
+            _ => return Err(bad()),
+        }
+        count += 1;
+    }
+    if count < n {
+        return Err(IoError::invalid(path, format!("file is truncated: ASCII data has {count} of {n} values")));
+    }
+    Ok(out)
+}
+
+fn unit_name(u: LengthUnit) -> &'static str {
+    match u {
+        LengthUnit::Micrometre => "um",
+        LengthUnit::Millimetre => "mm",
+        LengthUnit::Metre => "m",
+        LengthUnit::Unknown => "unknown",
+    }
+}
+
+/// Write a `.nrrd` file (attached gzip data) atomically.
+pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
+    let g = v.geometry();
+    let t = RawType::of(v);
+    let vec3 = |x: [f64; 3]| format!("({},{},{})", num(x[0]), num(x[1]), num(x[2]));
+    let axis = |c: usize| [0, 1, 2].map(|r| g.direction[r][c] * g.spacing[c]);
+    let u = unit_name(g.unit);
+    let head = format!(
+        "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n\
+         type: {}\ndimension: 3\nspace: left-posterior-superior\nsizes: {} {} {}\n\
+         space directions: {} {} {}\nkinds: domain domain domain\nendian: little\nencoding: gzip\n\
+         space origin: {}\nspace units: \"{u}\" \"{u}\" \"{u}\"\n\n",
+        type_name(t),
+        g.dims[0],
+        g.dims[1],
+        g.dims[2],
+        vec3(axis(0)),
+        vec3(axis(1)),
+        vec3(axis(2)),
+        vec3(g.origin),
+    );
+    let data = raw::encode_le(v);
+    raw::write_atomic(path, |w| {
+        w.write_all(head.as_bytes())?;
+        let mut e = flate2::write::GzEncoder::new(w, flate2::Compression::fast());
+        e.write_all(&data)?;
+        e.finish()?;
+        Ok(())
+    })
+}

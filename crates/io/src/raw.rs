@@ -1,0 +1,293 @@
+//! Raw voxel buffers shared by the formats that store a plain array
+//! (NIfTI, NRRD, MetaImage): element types, byte order, lossless
+//! conversion into [`AnyVolume`], bounded reading and atomic writing.
+use crate::IoError;
+use interslice_core::{AnyVolume, Geometry, Volume};
+use rayon::prelude::*;
+use std::io::{BufWriter, Read, Write};
+use std::path::Path;
+
+/// Largest volume we agree to read, in voxels (2^33: a 2048³ volume). A
+/// header that claims more is refused before any memory is allocated.
+pub const MAX_VOXELS: usize = 1 << 33;
+
+/// Byte order of a stored array.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Endian {
+    /// Least significant byte first (every format we write).
+    Little,
+    /// Most significant byte first.
+    Big,
+}
+
+/// Element types found in files. Types wider than the four in-memory
+/// types are converted only when every value fits exactly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RawType {
+    /// unsigned 8-bit
+    U8,
+    /// signed 8-bit (stored as i16 in memory)
+    I8,
+    /// unsigned 16-bit
+    U16,
+    /// signed 16-bit
+    I16,
+    /// unsigned 32-bit (narrowed to u16/i16 when the values fit)
+    U32,
+    /// signed 32-bit (narrowed to u16/i16 when the values fit)
+    I32,
+    /// 32-bit float
+    F32,
+    /// 64-bit float (narrowed to f32 when every value is exact in f32)
+    F64,
+}
+
+impl RawType {
+    /// Bytes per element.
+    pub fn size(self) -> usize {
+        match self {
+            RawType::U8 | RawType::I8 => 1,
+            RawType::U16 | RawType::I16 => 2,
+            RawType::U32 | RawType::I32 | RawType::F32 => 4,
+            RawType::F64 => 8,
+        }
+    }
+
+    /// The raw type that stores a volume's voxel type.
+    pub fn of(v: &AnyVolume) -> RawType {
+        match v {
+            AnyVolume::U8(_) => RawType::U8,
+            AnyVolume::U16(_) => RawType::U16,
+            AnyVolume::I16(_) => RawType::I16,
+            AnyVolume::F32(_) => RawType::F32,
+        }
+    }
+}
+
+/// Check dims against [`MAX_VOXELS`] and return the byte count of the array.
+pub fn checked_bytes(path: &Path, dims: [usize; 3], t: RawType) -> Result<usize, IoError> {
+    if dims.contains(&0) {
+        return Err(IoError::invalid(path, format!("dims {dims:?} contain 0")));
+    }
+    let n = dims
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| {
+            IoError::unsupported(
+                path,
+                format!("dims {dims:?} are too large (more than {MAX_VOXELS} voxels)"),
+            )
+        })?;
+    Ok(n * t.size())
+}
+
+/// Read exactly `len` bytes from `r`. The buffer grows only as data arrives
+/// (at most 64 MiB is reserved ahead), so a header that lies about the size
+/// of a short file fails with "truncated" instead of allocating the lie.
+pub fn read_exact_bounded<R: Read + ?Sized>(
+    path: &Path,
+    r: &mut R,
+    len: usize,
+) -> Result<Vec<u8>, IoError> {
+    let mut buf = Vec::with_capacity(len.min(64 << 20));
+    r.take(len as u64)
+        .read_to_end(&mut buf)
+        .map_err(|e| IoError::read(path, e))?;
+    if buf.len() < len {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "file is truncated: the header needs {len} bytes of voxel data, found {}",
+                buf.len()
+            ),
+        ));
+    }
+    Ok(buf)
+}
+
+fn decode<T: Send, const N: usize>(
+    bytes: &[u8],
+    endian: Endian,
+    f: impl Fn([u8; N]) -> T + Sync + Send,
+) -> Vec<T> {
+    bytes
+        .par_chunks_exact(N)
+        .with_min_len(1 << 14)
+        .map(|c| {
+            let mut a: [u8; N] = c.try_into().expect("chunk of N bytes");
+            if endian == Endian::Big {
+                a.reverse();
+            }
+            f(a)
+        })
+        .collect()
+}
+
+/// Decode a raw array (x-fastest) into a volume, converting losslessly:
+/// i8 → i16; u32/i32 → u16 or i16 when every value fits; f64 → f32 when every
+/// value is exact in f32. Anything else is refused, never rescaled.
+pub fn decode_volume(
+    path: &Path,
+    geometry: Geometry,
+    t: RawType,
+    endian: Endian,
+    bytes: &[u8],
+) -> Result<AnyVolume, IoError> {
+    let n = geometry.len();
+    if bytes.len() != n * t.size() {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "voxel data has {} bytes but dims {:?} need {}",
+                bytes.len(),
+                geometry.dims,
+                n * t.size()
+            ),
+        ));
+    }
+    let bad = |e: interslice_core::CoreError| IoError::invalid(path, e.to_string());
+    let v = match t {
+        RawType::U8 => AnyVolume::U8(Volume::from_vec(geometry, bytes.to_vec()).map_err(bad)?),
+        RawType::I8 => AnyVolume::I16(
+            Volume::from_vec(
+                geometry,
+                decode(bytes, endian, |a: [u8; 1]| i16::from(a[0] as i8)),
+            )
+            .map_err(bad)?,
+        ),
+        RawType::U16 => AnyVolume::U16(
+            Volume::from_vec(geometry, decode(bytes, endian, u16::from_le_bytes)).map_err(bad)?,
+        ),
+        RawType::I16 => AnyVolume::I16(
+            Volume::from_vec(geometry, decode(bytes, endian, i16::from_le_bytes)).map_err(bad)?,
+        ),
+        RawType::F32 => AnyVolume::F32(
+            Volume::from_vec(geometry, decode(bytes, endian, f32::from_le_bytes)).map_err(bad)?,
+        ),
+        RawType::U32 | RawType::I32 => {
+            let wide: Vec<i64> = if t == RawType::U32 {
+                decode(bytes, endian, |a| i64::from(u32::from_le_bytes(a)))
+            } else {
+                decode(bytes, endian, |a| i64::from(i32::from_le_bytes(a)))
+            };
+            let (lo, hi) = wide
+                .par_iter()
+                .fold(|| (i64::MAX, i64::MIN), |(l, h), &x| (l.min(x), h.max(x)))
+                .reduce(|| (i64::MAX, i64::MIN), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+            if lo >= 0 && hi <= i64::from(u16::MAX) {
+                AnyVolume::U16(
+                    Volume::from_vec(geometry, wide.par_iter().map(|&x| x as u16).collect())
+                        .map_err(bad)?,
+                )
+            } else if lo >= i64::from(i16::MIN) && hi <= i64::from(i16::MAX) {
+                AnyVolume::I16(
+                    Volume::from_vec(geometry, wide.par_iter().map(|&x| x as i16).collect())
+                        .map_err(bad)?,
+                )
+            } else {
+                return Err(IoError::unsupported(
+                    path,
+                    format!(
+                        "32-bit integer values {lo}..={hi} do not fit in 16 bits (convert to float first)"
+                    ),
+                ));
+            }
+        }
+        RawType::F64 => {
+            let wide: Vec<f64> = decode(bytes, endian, f64::from_le_bytes);
+            if wide
+                .par_iter()
+                .any(|&x| f64::from(x as f32) != x && !x.is_nan())
+            {
+                return Err(IoError::unsupported(
+                    path,
+                    "64-bit float values are not exact in 32-bit float",
+                ));
+            }
+            AnyVolume::F32(
+                Volume::from_vec(geometry, wide.par_iter().map(|&x| x as f32).collect())
+                    .map_err(bad)?,
+            )
+        }
+    };
+    Ok(v)
+}
+
+/// The voxels of a volume as little-endian bytes, x-fastest.
+pub fn encode_le(v: &AnyVolume) -> Vec<u8> {
+    match v {
+        AnyVolume::U8(v) => v.data().to_vec(),
+        AnyVolume::U16(v) => v
+            .data()
+            .par_iter()
+            .with_min_len(1 << 14)
+            .flat_map_iter(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::I16(v) => v
+            .data()
+            .par_iter()
+            .with_min_len(1 << 14)
+            .flat_map_iter(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::F32(v) => v
+            .data()
+            .par_iter()
+            .with_min_len(1 << 14)
+            .flat_map_iter(|x| x.to_le_bytes())
+            .collect(),
+    }
+}
+
+/// Write a file atomically: `f` writes into a temporary file in the same
+/// directory, which is renamed over `path` only when everything succeeded.
+/// On any error the temporary file is removed and `path` is untouched.
+pub fn write_atomic(
+    path: &Path,
+    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), IoError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| IoError::write(path, e))?;
+    {
+        let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
+        f(&mut w).map_err(|e| IoError::write(path, e))?;
+        w.flush().map_err(|e| IoError::write(path, e))?;
+    }
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| IoError::write(path, e))?;
+    tmp.persist(path)
+        .map_err(|e| IoError::write(path, e.error))?;
+    Ok(())
+}
+
+/// Open a file for reading with a path-naming error.
+pub fn open(path: &Path) -> Result<std::io::BufReader<std::fs::File>, IoError> {
+    let f = std::fs::File::open(path).map_err(|e| IoError::read(path, e))?;
+    Ok(std::io::BufReader::with_capacity(1 << 20, f))
+}
+
+/// The process umask (read from /proc; 022 when it cannot be read), so
+/// written files get the permissions a plain `File::create` would give.
+#[cfg(unix)]
+fn umask() -> u32 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("Umask:"))
+                .and_then(|m| u32::from_str_radix(m.trim(), 8).ok())
+        })
+        .unwrap_or(0o022)
+}
