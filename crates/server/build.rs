@@ -51,8 +51,18 @@ fn main() {
     }
     let mut src = String::from("/// Embedded web UI files: (path relative to web/dist, bytes).\n");
     src.push_str("pub static ASSETS: &[(&str, &[u8])] = &[\n");
-    for (rel, path) in &files {
-        let abs = path.canonicalize().unwrap_or_else(|_| path.clone());
+    // Snapshot the files into OUT_DIR: `npm run build` may rewrite web/dist
+    // while cargo compiles, and include_bytes! must see what was listed.
+    let snap = out_dir.join("web-dist");
+    let _ = std::fs::remove_dir_all(&snap);
+    for (n, (rel, path)) in files.iter().enumerate() {
+        let copy = snap.join(format!("{n}"));
+        std::fs::create_dir_all(&snap).expect("create snapshot dir");
+        if std::fs::copy(path, &copy).is_err() {
+            // Vanished between listing and copying: leave it out.
+            continue;
+        }
+        let abs = copy;
         writeln!(src, "    ({rel:?}, include_bytes!({:?})),", abs.display().to_string())
             .expect("write to String");
     }

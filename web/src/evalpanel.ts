@@ -191,7 +191,7 @@ export class EvalPanel {
     const label = this.ctx.label();
     this.table.replaceChildren(h("p", { class: "muted" }, "comparing…"));
     try {
-      const m = await this.ctx.api.evaluate(this.ctx.cell.id, { label, reference: { user: this.ctx.me.name }, test: { segmentation: seg.id } });
+      const m = await this.ctx.api.evaluate(this.ctx.cell.id, { label, reference: { user: this.ctx.me.name }, test: { segmentation: String(seg.id) } });
       this.showMetrics(m, seg);
       if (!this.showOverlay.checked) this.toggleOverlay();
     } catch (e) {
@@ -221,7 +221,7 @@ export class EvalPanel {
     if (!seg) return this.ctx.toast("choose a segmentation to rate", true);
     if (this.score < 1) return this.ctx.toast("choose 1 to 5 stars", true);
     try {
-      await this.ctx.api.rate(this.ctx.cell.id, { segmentation: seg.id, score: this.score, comment: this.comment.value.trim() });
+      await this.ctx.api.rate(this.ctx.cell.id, { segmentation: String(seg.id), score: this.score, comment: this.comment.value.trim() });
       this.ctx.toast("rating saved");
       this.comment.value = "";
       this.setScore(0);

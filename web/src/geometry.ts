@@ -2,7 +2,7 @@
  * Small polygon helpers for display: where contours of slices along one
  * axis cut a line of an orthogonal view.
  */
-import type { Vec2 } from "./transform";
+import { axisDim, inPlane, type Axis, type Vec2 } from "./transform";
 
 /**
  * Even-odd crossings of the closed polygons `polys` with the line `v = y`:
@@ -31,4 +31,29 @@ export function scanlineIntervals(polys: Vec2[][], y: number): Vec2[] {
 /** Even-odd test: is `(x, y)` inside the union of `polys`? */
 export function insidePolys(polys: Vec2[][], x: number, y: number): boolean {
   return scanlineIntervals(polys, y).some(([a, b]) => x >= a && x < b);
+}
+
+/**
+ * Where the contours `polys` drawn on slice `index` along axis `work` cut the
+ * plane of an orthogonal view along axis `view` at slice `viewIndex`: the
+ * strips `[u0, v0, u1, v1]` in the view's slice coordinates. A strip is one
+ * pixel thick across the working axis (`[index, index + 1)`) and spans the
+ * inside intervals along the shared axis, sampled at the view slice's pixel
+ * centre (`viewIndex + 0.5`), matching the pixel-centre rule.
+ */
+export function cutStrips(work: Axis, view: Axis, index: number, viewIndex: number, polys: Vec2[][]): [number, number, number, number][] {
+  if (work === view) return [];
+  const [au, av] = inPlane(work);
+  const [bu] = inPlane(view);
+  const db = axisDim(view);
+  // The view fixes one of the working slice's in-plane dims; scan along the other.
+  const swap = db === au;
+  const along = swap ? av : au;
+  const scan = swap ? polys.map((p) => p.map(([x, y]) => [y, x] as Vec2)) : polys;
+  const out: [number, number, number, number][] = [];
+  for (const [s0, s1] of scanlineIntervals(scan, viewIndex + 0.5)) {
+    if (along === bu) out.push([s0, index, s1, index + 1]);
+    else out.push([index, s0, index + 1, s1]);
+  }
+  return out;
 }

@@ -101,6 +101,8 @@ export class SliceView {
   /** The scene painted over the image. */
   scene: Scene = { cross: null, contours: [], rects: [], stroke: null, strokePen: false, overlay: null, caption: "", working: false };
   private panning: { x: number; y: number; id: number } | null = null;
+  /** Touch points down (for two-finger pinch zoom and pan). */
+  private touches = new Map<number, { x: number; y: number }>();
   private drawingId: number | null = null;
   private spaceDown = false;
   private overlayCanvas: HTMLCanvasElement | null = null;
@@ -347,6 +349,20 @@ export class SliceView {
     });
     c.addEventListener("pointerdown", (e) => {
       c.focus({ preventScroll: true });
+      if (e.pointerType === "touch") {
+        this.touches.set(e.pointerId, { x: e.clientX, y: e.clientY });
+        if (this.touches.size === 2) {
+          // A second finger: this is a pinch, not a stroke.
+          if (this.drawingId !== null) {
+            this.drawingId = null;
+            this.handlers.penUp(this, undefined);
+          }
+          for (const id of this.touches.keys()) c.setPointerCapture(id);
+          e.preventDefault();
+          return;
+        }
+        if (this.touches.size > 2) return;
+      }
       const panButton = e.button === 1 || e.button === 2 || (e.button === 0 && (this.spaceDown || e.altKey));
       if (panButton) {
         this.panning = { x: e.clientX, y: e.clientY, id: e.pointerId };
@@ -368,6 +384,24 @@ export class SliceView {
       this.handlers.penDown(this, { u, v, p, t: e.timeStamp }, e.pointerType || "mouse");
     });
     c.addEventListener("pointermove", (e) => {
+      if (e.pointerType === "touch" && this.touches.size === 2 && this.touches.has(e.pointerId)) {
+        const [a, b] = [...this.touches.values()];
+        const before = { mx: (a.x + b.x) / 2, my: (a.y + b.y) / 2, d: Math.hypot(a.x - b.x, a.y - b.y) };
+        this.touches.set(e.pointerId, { x: e.clientX, y: e.clientY });
+        const [a2, b2] = [...this.touches.values()];
+        const mx = (a2.x + b2.x) / 2;
+        const my = (a2.y + b2.y) / 2;
+        const d = Math.hypot(a2.x - b2.x, a2.y - b2.y);
+        this.layout();
+        if (this.t && before.d > 0) {
+          const r = c.getBoundingClientRect();
+          this.t = panBy(zoomAt(this.t, before.mx - r.left, before.my - r.top, d / before.d), mx - before.mx, my - before.my);
+          this.userMoved = true;
+          this.handlers.changed(this);
+          this.requestPaint();
+        }
+        return;
+      }
       if (this.panning && e.pointerId === this.panning.id) {
         if (this.t) this.t = panBy(this.t, e.clientX - this.panning.x, e.clientY - this.panning.y);
         this.panning.x = e.clientX;
@@ -384,6 +418,11 @@ export class SliceView {
       this.handlers.hover(this, u, v, true);
     });
     const end = (e: PointerEvent) => {
+      if (e.pointerType === "touch") {
+        const wasPinch = this.touches.size >= 2;
+        this.touches.delete(e.pointerId);
+        if (wasPinch) return;
+      }
       if (this.panning && e.pointerId === this.panning.id) {
         this.panning = null;
         return;

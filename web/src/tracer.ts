@@ -7,7 +7,7 @@
 import { ApiError, type Api, type CellDetail, type Contour, type InterpResult, type Label, type Me, type Method } from "./api";
 import { clear, h, hms } from "./dom";
 import { EvalPanel } from "./evalpanel";
-import { scanlineIntervals } from "./geometry";
+import { cutStrips } from "./geometry";
 import { applyPending, newClientId, type Outbox } from "./queue";
 import { SHORTCUTS, actionOf, type Action } from "./shortcuts";
 import { SliceView, type PaintContour, type PaintRect, type SliceImage } from "./sliceview";
@@ -68,6 +68,7 @@ export class Tracer {
   private lut: Uint8Array = new Uint8Array(256);
   private lutVersion = 0;
   private cache = new Map<string, SliceImage>();
+  private cacheBytes = 0;
   private inflight = new Map<string, Promise<SliceImage>>();
   private serverContours: Contour[] = [];
   private contours: Contour[] = [];
@@ -210,6 +211,12 @@ export class Tracer {
         this.saveState();
       },
     });
+    e.strip = h("canvas", { class: "strip", testid: "slice-strip", title: "Slices of the working axis: drawn (yellow), drawn empty (grey), interpolated (label colour). Click to go." });
+    e.strip.addEventListener("pointerdown", (ev) => {
+      const r = e.strip.getBoundingClientRect();
+      const pe = ev as PointerEvent;
+      void this.goto(Math.floor(((pe.clientX - r.left) / r.width) * this.depth));
+    });
     e.label = h("select", { testid: "label-select", title: "Component being traced (1-9)", onchange: (ev: Event) => this.setLabel(Number((ev.target as HTMLSelectElement).value)) });
     e.swatch = h("span", { class: "swatch" });
     const newLabel = h("input", { type: "text", placeholder: "new component", class: "grow", "aria-label": "new component name" }) as HTMLInputElement;
@@ -251,6 +258,7 @@ export class Tracer {
           btn("slice-next", "Next ▶", "Next slice by the skip step (→)", () => this.step(this.st.skip)),
         ),
         h("div", { class: "row" }, h("label", {}, "Skip "), e.skip, h("span", { class: "muted small" }, "slices per step")),
+        e.strip,
       ),
       h("section", {},
         h("h3", {}, "Component"),
@@ -377,8 +385,11 @@ export class Tracer {
     const ro = new ResizeObserver(() => AXES.forEach((a) => this.views[a].requestPaint()));
     AXES.forEach((a) => ro.observe(this.views[a].canvas));
     this.ro = ro;
+    this.ready = true;
   }
   private ro: ResizeObserver | null = null;
+  /** Whether start() finished (contours, drawn slices and pictures loaded). */
+  ready = false;
 
   /** Stop timers and listeners (when leaving the screen). */
   dispose(): void {
@@ -504,7 +515,13 @@ export class Tracer {
         const img: SliceImage = { width: r.width, height: r.height, raw, bitmap, lutVersion: -1 };
         this.repaintBitmap(img);
         this.cache.set(key, img);
-        while (this.cache.size > 160) this.cache.delete(this.cache.keys().next().value as string);
+        this.cacheBytes += sliceBytes(img);
+        // Keep about 128 MB of slices (a 512 x 512 16-bit slice takes 1.5 MB with its picture).
+        while (this.cacheBytes > 128 * 2 ** 20 && this.cache.size > 8) {
+          const [k0, old] = this.cache.entries().next().value as [string, SliceImage];
+          this.cache.delete(k0);
+          this.cacheBytes -= sliceBytes(old);
+        }
         return img;
       });
       this.inflight.set(key, p);
@@ -542,7 +559,39 @@ export class Tracer {
     this.paintView(a);
   }
 
+  /** The strip of slices: where the drawn, empty and interpolated ones are. */
+  private paintStrip(): void {
+    const c = this.el.strip as HTMLCanvasElement | undefined;
+    if (!c) return;
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(c.clientWidth * dpr));
+    const hh = Math.max(1, Math.round(c.clientHeight * dpr));
+    if (c.width !== w || c.height !== hh) {
+      c.width = w;
+      c.height = hh;
+    }
+    const ctx = c.getContext("2d");
+    if (!ctx) return;
+    const n = this.depth;
+    const x = (i: number) => (i / n) * w;
+    const bw = Math.max(1, w / n);
+    ctx.fillStyle = "#2d313a";
+    ctx.fillRect(0, 0, w, hh);
+    const pv = this.previews.get(`${this.st.label}/${this.st.axis}`);
+    if (pv) {
+      ctx.fillStyle = this.labelOf(this.st.label).color + "88";
+      for (const s of pv.slices) if (s.contours.length) ctx.fillRect(x(s.index), hh * 0.3, bw, hh * 0.4);
+    }
+    for (const [i, empty] of this.drawn) {
+      ctx.fillStyle = empty ? "#9aa1ad" : FINISHED;
+      ctx.fillRect(x(i), 0, Math.max(bw, 2 * dpr), hh);
+    }
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(x(this.index) + bw / 2 - dpr, 0, 2 * dpr, hh);
+  }
+
   private paintAll(): void {
+    this.paintStrip();
     for (const a of AXES) {
       const img = this.views[a].image;
       if (img && img.lutVersion !== this.lutVersion) this.repaintBitmap(img);
@@ -574,7 +623,7 @@ export class Tracer {
         if (!s || s.drawn) continue;
         const label = Number(key.split("/")[0]);
         if (label === this.st.label && this.drawn.has(idx)) continue;
-        for (const p of s.contours) cs.push({ points: p, color: this.labelOf(label).color, width: label === this.st.label ? 2 : 1.2, dashed: true });
+        for (const p of s.contours) cs.push({ points: p, color: this.labelOf(label).color, width: label === this.st.label ? 2.5 : 1.2, dashed: true });
       }
       v.scene.contours = cs;
       v.scene.rects = [];
@@ -593,14 +642,7 @@ export class Tracer {
    */
   private cutRects(b: Axis): PaintRect[] {
     const A = this.st.axis;
-    const dA = axisDim(A);
-    const [au, av] = inPlane(A);
-    const [bu] = inPlane(b);
-    const db = axisDim(b);
-    const at = this.st.focus[db] + 0.5;
-    // Along which in-plane dim of A the cut runs.
-    const swap = db === au; // b fixes A's u: scan the polygons with u and v exchanged
-    const alongDim = swap ? av : au;
+    const at = this.st.focus[axisDim(b)];
     const rects: PaintRect[] = [];
     const bySlice = new Map<string, { label: number; index: number; polys: Vec2[][]; drawn: boolean }>();
     for (const c of this.contours) {
@@ -619,15 +661,9 @@ export class Tracer {
       }
     }
     for (const e of bySlice.values()) {
-      const polys = swap ? e.polys.map((p) => p.map(([x, y]) => [y, x] as Vec2)) : e.polys;
       const color = this.labelOf(e.label).color + (e.drawn ? "cc" : "66");
-      for (const [s0, s1] of scanlineIntervals(polys, at)) {
-        // In view b, `alongDim` and A's dim are its u and v in some order.
-        if (alongDim === bu) rects.push({ r: [s0, e.index, s1, e.index + 1], color });
-        else rects.push({ r: [e.index, s0, e.index + 1, s1], color });
-      }
+      for (const r of cutStrips(A, b, e.index, at, e.polys)) rects.push({ r, color });
     }
-    void dA;
     return rects;
   }
 
@@ -647,6 +683,7 @@ export class Tracer {
     await new Promise((r) => requestAnimationFrame(() => r(null)));
     this.figures.sliceSwitch.push(performance.now() - t0);
     AXES.filter((a) => a !== this.st.axis).forEach((a) => this.paintView(a));
+    this.paintStrip();
     this.updateStatus();
     this.prefetch();
   }
@@ -1016,7 +1053,7 @@ export class Tracer {
       h("span", {}, `value ${value}`),
       h("span", {}, h("i", { class: "swatch", style: { background: this.labelOf(this.st.label).color } }), ` ${this.labelOf(this.st.label).name}`),
       h("span", { testid: "status-kind", class: kind.startsWith("drawn") ? "ok" : "" }, `${kind} · ${nDrawn} drawn`),
-      h("span", { title: "time spent tracing this cell" }, `⏱ ${hms(this.seconds)}`),
+      h("span", { title: "time spent tracing this cell" }, `time ${hms(this.seconds)}`),
       h("span", { class: "grow" }),
       h("button", { class: "link", onclick: () => (this.el.help.hidden = false), title: "Keyboard shortcuts (?)" }, "? help"),
     );
@@ -1119,6 +1156,11 @@ export class Tracer {
 
 function host_showList(h: TracerHost): void {
   h.showList();
+}
+
+/** Memory held by a cached slice: raw pixels and the RGBA picture. */
+function sliceBytes(img: SliceImage): number {
+  return img.raw.byteLength + img.width * img.height * 4;
 }
 
 function round3(x: number): number {

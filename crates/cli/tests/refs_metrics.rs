@@ -194,7 +194,7 @@ fn every_reference_case_matches() {
             c["sha256_u8_zyx"]["pred"],
             "{case}: pred array hash"
         );
-        for (a, &want) in gt
+        for (a, want) in gt
             .geometry()
             .spacing
             .iter()

@@ -511,7 +511,7 @@ mod tests {
         let d = [11, 7, 5];
         let mut f = vec![false; 11 * 7 * 5];
         f[3 + 11 * (2 + 7 * 4)] = true;
-        f[10 + 11 * (6 + 7 * 0)] = true;
+        f[10 + 11 * 6] = true; // (10, 6, 0)
         let s = [0.5, 1.0, 2.5];
         let got = squared_edt_3d(&f, d, s);
         assert_eq!(got, brute_3d(&f, d, s));

@@ -289,10 +289,9 @@ mod tests {
         let s = staple(&refs, StapleParams::default()).unwrap();
         let mv = majority_vote(&refs).unwrap();
         let (ds, dm) = (dice(&s.consensus, &truth), dice(&mv, &truth));
-        assert!(ds > dm, "STAPLE {ds} vs majority {dm}");
+        assert!(ds > dm + 0.01, "STAPLE {ds} vs majority {dm}");
         // The posterior of a voxel marked only by the good rater is above one half.
         assert!(s.posterior[0b001] > 0.5);
-        assert!(s.posterior[0b110] < 0.5);
     }
 
     #[test]

@@ -100,10 +100,10 @@ fn run(method: &dyn interslice_interp::Interpolator, full: &Mask, axis: Axis, dr
 /// Minimum Dice from every 5th slice, per method: (ellipsoid, two-lobed nucleus).
 /// Methods not listed (added later) must reach the generic floor.
 const FLOORS: &[(&str, f64, f64)] = &[
-    ("linear", 0.90, 0.85),
-    ("shape-based", 0.93, 0.90),
-    ("shape-cubic", 0.95, 0.91),
-    ("shape-aligned", 0.95, 0.92),
+    ("linear", 0.955, 0.92),
+    ("shape-based", 0.955, 0.925),
+    ("shape-cubic", 0.955, 0.935),
+    ("shape-aligned", 0.955, 0.935),
 ];
 const GENERIC_FLOOR: f64 = 0.70;
 
@@ -198,7 +198,8 @@ fn two_nucleoli_stay_two_objects() {
     let drawn = every(26, 5);
     for m in methods() {
         let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
-        for k in [7usize, 12, 13, 17] {
+        // Skipped slices whose bracketing drawn slices both show both.
+        for k in [7usize, 8, 12, 13] {
             let s = out.slice(Axis::Z, k).unwrap();
             assert_eq!(count_components(&s, 34, 28), 2, "{}: z={k} must show two nucleoli", m.name());
         }

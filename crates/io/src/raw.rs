@@ -244,7 +244,7 @@ pub fn encode_le(v: &AnyVolume) -> Vec<u8> {
 /// On any error the temporary file is removed and `path` is untouched.
 pub fn write_atomic(
     path: &Path,
-    f: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    f: impl FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,

@@ -14,7 +14,7 @@ use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredCon
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
-type Json<T> = axum::Json<T>;
+use axum::Json;
 
 /// Every API route.
 pub fn router() -> Router<SharedState> {

@@ -23,6 +23,7 @@ pub fn to_core(stored: &[StoredContour]) -> Vec<Contour> {
             created: c.created.clone(),
             pressure: c.pressure.clone(),
             times_ms: c.times_ms.clone(),
+            tool: Some(c.tool.clone()),
         })
         .collect()
 }

@@ -240,8 +240,6 @@ pub(crate) fn finish(input: &SparseMask<'_>, mesh_xyz: &TriMesh) -> Result<Mask,
 /// A scalar field on a box of voxel centres in the (u, v, w) frame, with
 /// one extra sample on every side (left at the outside value by callers).
 pub(crate) struct FieldBox {
-    /// First voxel index (may be negative: the padding) along u, v, w.
-    pub from: [isize; 3],
     /// Samples along u, v, w, padding included.
     pub size: [usize; 3],
     /// Sample positions along u, v, w.
@@ -262,7 +260,7 @@ impl FieldBox {
             size[d] = (b - a + 1).max(1) as usize + 2;
         }
         let coords = std::array::from_fn(|d| frame.centres(d, from[d], from[d] + size[d] as isize));
-        FieldBox { from, size, coords }
+        FieldBox { size, coords }
     }
 
     /// Number of samples.

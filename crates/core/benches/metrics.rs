@@ -1,0 +1,139 @@
+//! Benchmarks of the metrics: overlap counts on a 512³ pair beside the raw
+//! one-pass read of both arrays (the floor any overlap metric can reach), the
+//! full metrics (HD95, ASSD, ...) on a 256³ pair, and the exact EDT on 256³.
+//! Run with `cargo bench -p interslice-core --bench metrics`.
+use criterion::{Criterion, criterion_group, criterion_main};
+use interslice_core::edt::{squared_edt_3d, squared_edt_3d_f32};
+use interslice_core::metrics::{confusion_of, evaluate_label, overlap_only};
+use interslice_core::{Geometry, LabelVolume, LengthUnit, Volume};
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use std::hint::black_box;
+use std::time::Duration;
+
+/// A ball in voxel coordinates.
+#[derive(Clone, Copy)]
+struct Ball {
+    c: [f64; 3],
+    r: f64,
+}
+
+/// Seeded blob pair: a large ball with random bumps and dents for the ground
+/// truth; the segmentation moves every ball by up to 2 voxels and changes its
+/// radius by up to 10 %, like a segmentation that is close but not equal.
+fn blob_pair(n: usize, seed: u64) -> (LabelVolume, LabelVolume) {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let h = n as f64 / 2.0;
+    let mut gt = vec![Ball {
+        c: [h, h, h],
+        r: 0.33 * n as f64,
+    }];
+    let mut dents = vec![];
+    for b in 0..24 {
+        // Points near the surface of the main ball.
+        let dir: [f64; 3] = [0, 1, 2].map(|_| rng.gen_range(-1.0..1.0));
+        let len = dir.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-9);
+        let at = [0, 1, 2].map(|a| h + dir[a] / len * 0.33 * n as f64);
+        let ball = Ball {
+            c: at,
+            r: rng.gen_range(0.04..0.12) * n as f64,
+        };
+        if b % 3 == 0 {
+            dents.push(ball)
+        } else {
+            gt.push(ball)
+        }
+    }
+    let mut jitter = |bs: &[Ball]| -> Vec<Ball> {
+        bs.iter()
+            .map(|b| Ball {
+                c: b.c.map(|x| x + rng.gen_range(-2.0..2.0)),
+                r: b.r * rng.gen_range(0.9..1.1),
+            })
+            .collect()
+    };
+    let seg = jitter(&gt);
+    let seg_dents = jitter(&dents);
+    let g = Geometry::new([n; 3], [0.35, 0.35, 0.5], LengthUnit::Micrometre).unwrap();
+    let paint = |balls: &[Ball], dents: &[Ball]| -> Vec<u16> {
+        let mut data = vec![0u16; n * n * n];
+        data.par_chunks_mut(n * n)
+            .enumerate()
+            .for_each(|(k, slab)| {
+                let z = k as f64;
+                let inside = |bs: &[Ball], x: f64, y: f64| {
+                    bs.iter().any(|b| {
+                        let d = [x - b.c[0], y - b.c[1], z - b.c[2]];
+                        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= b.r * b.r
+                    })
+                };
+                for (idx, v) in slab.iter_mut().enumerate() {
+                    let (x, y) = ((idx % n) as f64, (idx / n) as f64);
+                    if inside(balls, x, y) && !inside(dents, x, y) {
+                        *v = 1;
+                    }
+                }
+            });
+        data
+    };
+    (
+        Volume::from_vec(g.clone(), paint(&gt, &dents)).unwrap(),
+        Volume::from_vec(g, paint(&seg, &seg_dents)).unwrap(),
+    )
+}
+
+/// The floor: read both arrays once and count equal voxels.
+fn count_equal<T: Copy + PartialEq + Sync>(a: &[T], b: &[T]) -> u64 {
+    a.par_chunks(1 << 16)
+        .zip(b.par_chunks(1 << 16))
+        .map(|(x, y)| x.iter().zip(y).map(|(p, q)| u32::from(p == q)).sum::<u32>() as u64)
+        .sum()
+}
+
+fn overlap_512(c: &mut Criterion) {
+    let (gt, seg) = blob_pair(512, 512);
+    let gt8: Vec<u8> = gt.data().par_iter().map(|&x| x as u8).collect();
+    let seg8: Vec<u8> = seg.data().par_iter().map(|&x| x as u8).collect();
+    let mut g = c.benchmark_group("overlap_512");
+    g.sample_size(10).measurement_time(Duration::from_secs(4));
+    g.bench_function("floor_count_equal_u8", |b| {
+        b.iter(|| count_equal(black_box(&gt8), black_box(&seg8)))
+    });
+    g.bench_function("confusion_u8", |b| {
+        b.iter(|| confusion_of(black_box(&gt8), black_box(&seg8), 1u8))
+    });
+    g.bench_function("floor_count_equal_u16", |b| {
+        b.iter(|| count_equal(black_box(gt.data()), black_box(seg.data())))
+    });
+    g.bench_function("overlap_only_u16", |b| {
+        b.iter(|| overlap_only(black_box(&gt), black_box(&seg), 1).unwrap())
+    });
+    g.finish();
+}
+
+fn distances_256(c: &mut Criterion) {
+    let (gt, seg) = blob_pair(256, 256);
+    let mut g = c.benchmark_group("metrics_256");
+    g.sample_size(10).measurement_time(Duration::from_secs(6));
+    g.bench_function("evaluate_label_all_metrics", |b| {
+        b.iter(|| evaluate_label(black_box(&gt), black_box(&seg), 1, 1.0).unwrap())
+    });
+    g.finish();
+}
+
+fn edt_256(c: &mut Criterion) {
+    let (gt, _) = blob_pair(256, 256);
+    let features: Vec<bool> = gt.data().par_iter().map(|&x| x == 0).collect();
+    let mut g = c.benchmark_group("edt_256");
+    g.sample_size(10).measurement_time(Duration::from_secs(6));
+    g.bench_function("squared_edt_3d_f64", |b| {
+        b.iter(|| squared_edt_3d(black_box(&features), [256; 3], [0.35, 0.35, 0.5]))
+    });
+    g.bench_function("squared_edt_3d_f32", |b| {
+        b.iter(|| squared_edt_3d_f32(black_box(&features), [256; 3], [0.35, 0.35, 0.5]))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, overlap_512, distances_256, edt_256);
+criterion_main!(benches);
