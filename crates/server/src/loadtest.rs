@@ -1,1 +1,0 @@
-//! Load test and latency benchmark (client side).
