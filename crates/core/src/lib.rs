@@ -27,4 +27,4 @@ pub use contour::Contour;
 pub use error::CoreError;
 pub use geometry::{Geometry, LengthUnit};
 pub use slice::{Axis, SliceRef};
-pub use volume::{AnyVolume, LabelVolume, Mask, Volume, Voxel};
+pub use volume::{AnyVolume, LabelVolume, Mask, SliceView, Volume, Voxel};

@@ -128,6 +128,24 @@ impl<T: Voxel> Volume<T> {
         Ok(())
     }
 
+    /// A borrowed view of slice `(axis, index)`: no copy, `O(1)` to make;
+    /// pixel `(u, v)` is read straight from the volume's storage.
+    pub fn view(&self, axis: Axis, index: usize) -> Result<SliceView<'_, T>, CoreError> {
+        self.check_slice(axis, index)?;
+        let [nx, ny, _] = self.geometry.dims;
+        let stride = [1, nx, nx * ny];
+        let (a, b) = axis.in_plane();
+        let (width, height) = self.slice_shape(axis);
+        Ok(SliceView {
+            data: &self.data,
+            base: stride[axis.dim()] * index,
+            stride_u: stride[a],
+            stride_v: stride[b],
+            width,
+            height,
+        })
+    }
+
     /// Copy slice `(axis, index)` into a row-major `width * height` buffer
     /// (`buf[u + width * v]`).
     pub fn slice(&self, axis: Axis, index: usize) -> Result<Vec<T>, CoreError> {
@@ -309,6 +327,41 @@ impl AnyVolume {
     }
 }
 
+/// A borrowed 2D view of one slice of a [`Volume`] (see [`Volume::view`]).
+#[derive(Debug, Clone, Copy)]
+pub struct SliceView<'a, T> {
+    data: &'a [T],
+    base: usize,
+    stride_u: usize,
+    stride_v: usize,
+    width: usize,
+    height: usize,
+}
+
+impl<T: Copy> SliceView<'_, T> {
+    /// Extent along u.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Extent along v.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Pixel `(u, v)`; panics when out of the slice, like slice indexing.
+    #[inline]
+    pub fn get(&self, u: usize, v: usize) -> T {
+        assert!(u < self.width && v < self.height, "pixel ({u}, {v}) outside the slice");
+        self.data[self.base + u * self.stride_u + v * self.stride_v]
+    }
+
+    /// Pixels in row-major order (`u` fastest).
+    pub fn iter(&self) -> impl Iterator<Item = T> + '_ {
+        (0..self.height).flat_map(move |v| (0..self.width).map(move |u| self.get(u, v)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -335,7 +388,10 @@ mod tests {
         for axis in Axis::ALL {
             for idx in 0..v.slice_count(axis) {
                 let s = v.slice(axis, idx).unwrap();
+                let view = v.view(axis, idx).unwrap();
+                assert_eq!(view.iter().collect::<Vec<_>>(), s);
                 let (w, h) = v.slice_shape(axis);
+                assert_eq!((view.width(), view.height()), (w, h));
                 assert_eq!(s.len(), w * h);
                 for vv in 0..h {
                     for u in 0..w {
