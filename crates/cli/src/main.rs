@@ -18,12 +18,30 @@ struct Cli {
 enum Command {
     /// Print a volume's dims, spacing, type, range and labels.
     Info(cmd::info::Args),
+    /// Convert a volume between formats (values and geometry unchanged).
+    Convert(cmd::convert::Args),
+    /// Fill the slices between drawn slices of a sparse label volume.
+    Interpolate(cmd::interpolate::Args),
+    /// Drop slices of a ground truth, interpolate with every method, measure.
+    Study(cmd::study::Args),
+    /// Convert between contours files and label volumes.
+    Contours(cmd::contours::Args),
+    /// Measure a segmentation against a ground truth (overlap and surface metrics).
+    Evaluate(cmd::evaluate::Args),
+    /// Generate synthetic cell-CT volumes with their exact label volumes.
+    Phantom(cmd::phantom::Args),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info(a) => cmd::info::run(a),
+        Command::Convert(a) => cmd::convert::run(a),
+        Command::Interpolate(a) => cmd::interpolate::run(a),
+        Command::Study(a) => cmd::study::run(a),
+        Command::Contours(a) => cmd::contours::run(a),
+        Command::Evaluate(a) => cmd::evaluate::run(a),
+        Command::Phantom(a) => cmd::phantom::run(a),
     };
     if let Err(e) = result {
         // One line: the chain of causes joined by ": ".

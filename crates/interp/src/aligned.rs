@@ -18,22 +18,37 @@
 //! 4. A group present on one side only (a nucleolus that ends between drawn
 //!    slices, an unmatched branch of a split) is capped: a dome that shrinks
 //!    its signed distance by `R (1 − sqrt(1 − (z / L)²))`, `R` the deepest
-//!    inside distance, vanishing at `L = min(R, gap / 2)` — never reaching the
-//!    other drawn slice, which is known to lack it.
+//!    inside distance, vanishing at `L`. `L` comes from the sphere through the
+//!    object's cross-sections on this and the previous drawn slice
+//!    (`cap_trend`), or, for an object seen on one drawn slice only, is
+//!    [`SINGLE_SLICE_EXTENT`]` × R`; it is kept half a slice short of the
+//!    other drawn slice, which is known to lack the object.
 //! 5. Beyond the first and last drawn slices, objects on the outermost slice
-//!    get the same cap over at most half the neighbouring gap (when
-//!    [`ShapeAligned::end_caps`] is on; a slice outside the drawn range is not
-//!    known to be empty, but is not known to hold the object either).
+//!    get the same cap (when [`ShapeAligned::end_caps`] is on), at most one
+//!    neighbouring gap long: a slice outside the drawn range is not known to
+//!    be empty, and an outermost slice near the pole of an object gives a
+//!    short cap by the sphere rule.
+//!
+//! The crops of the two sides of a blend cover the same region (both groups'
+//! boxes, grown by the shift), so a shrinking object is blended with true
+//! distances, not with a far value. Drawn-empty slices enter the cubic slopes
+//! as in [`crate::sdf::drawn_maps`].
 //!
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
-use crate::sdf::{empty_value, signed_distance};
+use crate::sdf::{drawn_maps, empty_value, signed_distance};
 use crate::shape_cubic::pchip_slope;
 use crate::slices::{Plane, assemble};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::edt::squared_edt_2d_f32;
 use rayon::prelude::*;
+
+/// How far an object seen on one drawn slice only is assumed to reach past
+/// it, as a multiple of its deepest inside distance `R` on that slice: a plane
+/// at a uniformly random height through a sphere of radius `ρ` shows a disc
+/// of mean radius `πρ/4`, so `ρ ≈ 4R/π`.
+pub const SINGLE_SLICE_EXTENT: f64 = 4.0 / std::f64::consts::PI;
 
 /// Shape-based interpolation of matched, aligned objects with caps.
 #[derive(Debug, Clone, Copy)]
@@ -79,12 +94,24 @@ struct Crop {
 
 impl Crop {
     /// Signed distance of the pixels of `comps` (a group of components),
-    /// computed on their bounding box grown by `margin` pixels.
-    fn of_group(slice: &Drawn, comps: &[usize], margin: usize, plane: &Plane) -> Crop {
-        let mut bb = [usize::MAX, usize::MAX, 0, 0];
-        for &c in comps {
-            let b = slice.comps[c].bbox;
-            bb = [bb[0].min(b[0]), bb[1].min(b[1]), bb[2].max(b[2]), bb[3].max(b[3])];
+    /// computed on their bounding box, united with `also` (the partner
+    /// group's box, so that both crops of a blend cover the same region),
+    /// grown by `margin` pixels.
+    fn of_group(
+        slice: &Drawn,
+        comps: &[usize],
+        also: Option<[usize; 4]>,
+        margin: usize,
+        plane: &Plane,
+    ) -> Crop {
+        let mut bb = group_bbox(slice, comps);
+        if let Some(b) = also {
+            bb = [
+                bb[0].min(b[0]),
+                bb[1].min(b[1]),
+                bb[2].max(b[2]),
+                bb[3].max(b[3]),
+            ];
         }
         let u0 = bb[0].saturating_sub(margin);
         let v0 = bb[1].saturating_sub(margin);
@@ -151,6 +178,21 @@ impl Crop {
     }
 }
 
+/// Bounding box `[u0, v0, u1, v1)` of a group of components.
+fn group_bbox(slice: &Drawn, comps: &[usize]) -> [usize; 4] {
+    let mut bb = [usize::MAX, usize::MAX, 0, 0];
+    for &c in comps {
+        let b = slice.comps[c].bbox;
+        bb = [
+            bb[0].min(b[0]),
+            bb[1].min(b[1]),
+            bb[2].max(b[2]),
+            bb[3].max(b[3]),
+        ];
+    }
+    bb
+}
+
 /// Bilinear sample of a whole-slice map at pixel-index position (pu, pv),
 /// clamped to the slice.
 #[inline]
@@ -158,7 +200,10 @@ fn sample_full(d: &[f32], plane: &Plane, pu: f64, pv: f64) -> f32 {
     let x = pu.clamp(0.0, (plane.width - 1) as f64);
     let y = pv.clamp(0.0, (plane.height - 1) as f64);
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(plane.width - 1), (y0 + 1).min(plane.height - 1));
+    let (x1, y1) = (
+        (x0 + 1).min(plane.width - 1),
+        (y0 + 1).min(plane.height - 1),
+    );
     let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
     let at = |a: usize, b: usize| d[a + plane.width * b];
     let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
@@ -185,7 +230,12 @@ fn components(mask: &[bool], w: usize, h: usize) -> (Vec<u32>, Vec<Component>) {
             n += 1;
             su += u as f64;
             sv += v as f64;
-            bb = [bb[0].min(u), bb[1].min(v), bb[2].max(u + 1), bb[3].max(v + 1)];
+            bb = [
+                bb[0].min(u),
+                bb[1].min(v),
+                bb[2].max(u + 1),
+                bb[3].max(v + 1),
+            ];
             for dv in -1i64..=1 {
                 for du in -1i64..=1 {
                     let (nu, nv) = (u as i64 + du, v as i64 + dv);
@@ -246,9 +296,12 @@ fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usi
         linked[na + y as usize] = true;
     }
     // Mutual nearest among the unlinked, in physical units.
-    let radius = |c: &Component| (c.area as f64 * plane.spacing[0] * plane.spacing[1] / std::f64::consts::PI).sqrt();
+    let radius = |c: &Component| {
+        (c.area as f64 * plane.spacing[0] * plane.spacing[1] / std::f64::consts::PI).sqrt()
+    };
     let dist = |p: &Component, q: &Component| {
-        ((p.centroid[0] - q.centroid[0]) * plane.spacing[0]).hypot((p.centroid[1] - q.centroid[1]) * plane.spacing[1])
+        ((p.centroid[0] - q.centroid[0]) * plane.spacing[0])
+            .hypot((p.centroid[1] - q.centroid[1]) * plane.spacing[1])
     };
     let free_a: Vec<usize> = (0..na).filter(|&i| !linked[i]).collect();
     let free_b: Vec<usize> = (0..nb).filter(|&j| !linked[na + j]).collect();
@@ -304,7 +357,12 @@ enum GroupPlan {
     Blend { a: Crop, b: Crop, delta: [f64; 2] },
     /// Present on one side only: a cap on that side (`from_a`), vanishing
     /// at physical distance `len` from it.
-    Cap { d: Crop, from_a: bool, len: f64, depth: f32 },
+    Cap {
+        d: Crop,
+        from_a: bool,
+        len: f64,
+        depth: f32,
+    },
 }
 
 /// The dome offset added to a signed distance at distance `z` of a cap of
@@ -319,7 +377,18 @@ fn dome(z: f64, len: f64, depth: f32) -> Option<f32> {
 }
 
 impl ShapeAligned {
-    fn plan_gap(&self, a: &Drawn, b: &Drawn, gap: f64, plane: &Plane) -> Vec<GroupPlan> {
+    /// The plans of gap `(A, B)`; `before` is the drawn slice before A and
+    /// `after` the one after B, with their physical distances, for the trend
+    /// of objects that end inside the gap.
+    fn plan_gap(
+        &self,
+        a: &Drawn,
+        b: &Drawn,
+        gap: f64,
+        before: Option<(&Drawn, f64)>,
+        after: Option<(&Drawn, f64)>,
+        plane: &Plane,
+    ) -> Vec<GroupPlan> {
         let mut plans = Vec::new();
         for (ca, cb) in match_groups(a, b, plane) {
             match (ca.is_empty(), cb.is_empty()) {
@@ -328,27 +397,77 @@ impl ShapeAligned {
                     let delta = [pb[0] - pa[0], pb[1] - pa[1]];
                     let margin = delta[0].abs().max(delta[1].abs()).ceil() as usize + 3;
                     plans.push(GroupPlan::Blend {
-                        a: Crop::of_group(a, &ca, margin, plane),
-                        b: Crop::of_group(b, &cb, margin, plane),
+                        a: Crop::of_group(a, &ca, Some(group_bbox(b, &cb)), margin, plane),
+                        b: Crop::of_group(b, &cb, Some(group_bbox(a, &ca)), margin, plane),
                         delta,
                     });
                 }
                 (false, true) | (true, false) => {
                     let from_a = !ca.is_empty();
-                    let d = if from_a {
-                        Crop::of_group(a, &ca, 2, plane)
+                    let (d, trend) = if from_a {
+                        (
+                            Crop::of_group(a, &ca, None, 2, plane),
+                            cap_trend(a, &ca, before, plane),
+                        )
                     } else {
-                        Crop::of_group(b, &cb, 2, plane)
+                        (
+                            Crop::of_group(b, &cb, None, 2, plane),
+                            cap_trend(b, &cb, after, plane),
+                        )
                     };
                     let depth = d.depth();
-                    let len = (depth as f64).min(gap / 2.0);
-                    plans.push(GroupPlan::Cap { d, from_a, len, depth });
+                    let len = trend
+                        .unwrap_or(SINGLE_SLICE_EXTENT * depth as f64)
+                        .min(gap - 0.5 * plane.slice_spacing);
+                    plans.push(GroupPlan::Cap {
+                        d,
+                        from_a,
+                        len,
+                        depth,
+                    });
                 }
                 (true, true) => {}
             }
         }
         plans
     }
+}
+
+/// How far past drawn slice `this` an object continues, from the sphere
+/// through its cross-sections: with equivalent radii `r1` on `this` and `r0`
+/// on the `other` drawn slice (the components there that overlap it), `h`
+/// apart, the sphere `r(z)² = R² − (z − c)²` through both (z = 0 on `this`,
+/// `−h` on `other`) has `c = −h/2 − (r0² − r1²) / 2h` and ends at
+/// `c + R` — exact for a sphere, a round end otherwise. `None` when the
+/// object has no cross-section on `other`.
+fn cap_trend(
+    this: &Drawn,
+    comps: &[usize],
+    other: Option<(&Drawn, f64)>,
+    plane: &Plane,
+) -> Option<f64> {
+    let (o, h) = other?;
+    let a1: usize = comps.iter().map(|&c| this.comps[c].area).sum();
+    let mut hit = vec![false; o.comps.len()];
+    for (&x, &y) in this.ids.iter().zip(&o.ids) {
+        if x > 0 && y > 0 && comps.contains(&(x as usize - 1)) {
+            hit[y as usize - 1] = true;
+        }
+    }
+    let a0: usize = o
+        .comps
+        .iter()
+        .zip(&hit)
+        .filter(|(_, h)| **h)
+        .map(|(c, _)| c.area)
+        .sum();
+    if a0 == 0 || h <= 0.0 {
+        return None;
+    }
+    let px = plane.spacing[0] * plane.spacing[1] / std::f64::consts::PI;
+    let (r0, r1) = (a0 as f64 * px, a1 as f64 * px);
+    let c = -h / 2.0 - (r0 - r1) / (2.0 * h);
+    Some((c + (r1 + c * c).sqrt()).max(0.0))
 }
 
 /// Slope of the whole-slice maps through a knot for the aligned cubic.
@@ -372,13 +491,23 @@ impl Interpolator for ShapeAligned {
         let plane = Plane::of(&input);
         let drawn = input.drawn;
         let nd = drawn.len();
+        // Whole-slice maps (drawn-empty slices coned, see `drawn_maps`) give
+        // the cubic slopes; the components give the groups.
+        let maps = drawn_maps(&input, &plane, &vec![true; nd]);
         let slices: Vec<Drawn> = drawn
             .par_iter()
-            .map(|&d| {
-                let mask = input.mask.slice(input.axis, d).expect("validated drawn index");
+            .zip(maps)
+            .map(|(&d, sdf)| {
+                let mask = input
+                    .mask
+                    .slice(input.axis, d)
+                    .expect("validated drawn index");
                 let (ids, comps) = components(&mask, plane.width, plane.height);
-                let sdf = signed_distance(&mask, &plane);
-                Drawn { ids, comps, sdf }
+                Drawn {
+                    ids,
+                    comps,
+                    sdf: sdf.expect("every map computed"),
+                }
             })
             .collect();
         let ss = plane.slice_spacing;
@@ -389,7 +518,11 @@ impl Interpolator for ShapeAligned {
                     return Vec::new();
                 }
                 let gap = (drawn[g + 1] - drawn[g]) as f64 * ss;
-                self.plan_gap(&slices[g], &slices[g + 1], gap, &plane)
+                let before =
+                    (g > 0).then(|| (&slices[g - 1], (drawn[g] - drawn[g - 1]) as f64 * ss));
+                let after = (g + 2 < nd)
+                    .then(|| (&slices[g + 2], (drawn[g + 2] - drawn[g + 1]) as f64 * ss));
+                self.plan_gap(&slices[g], &slices[g + 1], gap, before, after, &plane)
             })
             .collect();
         // End caps: the outermost drawn slices' objects, over half the gap next to them.
@@ -398,10 +531,15 @@ impl Interpolator for ShapeAligned {
                 return None;
             }
             let all: Vec<usize> = (0..slices[which].comps.len()).collect();
-            let d = Crop::of_group(&slices[which], &all, 2, &plane);
+            let d = Crop::of_group(&slices[which], &all, None, 2, &plane);
             let depth = d.depth();
             let gap = drawn[which].abs_diff(drawn[other]) as f64 * ss;
-            Some((d, (depth as f64).min(gap / 2.0), depth))
+            let trend = cap_trend(&slices[which], &all, Some((&slices[other], gap)), &plane);
+            Some((
+                d,
+                trend.unwrap_or(SINGLE_SLICE_EXTENT * depth as f64).min(gap),
+                depth,
+            ))
         };
         let first_cap = end_cap(0, 1);
         let last_cap = end_cap(nd - 1, nd - 2);
@@ -435,7 +573,11 @@ impl Interpolator for ShapeAligned {
             });
             for plan in &plans[g] {
                 match plan {
-                    GroupPlan::Blend { a: ca, b: cb, delta } => {
+                    GroupPlan::Blend {
+                        a: ca,
+                        b: cb,
+                        delta,
+                    } => {
                         any = true;
                         blend(
                             &mut out,
@@ -453,7 +595,12 @@ impl Interpolator for ShapeAligned {
                             &plane,
                         );
                     }
-                    GroupPlan::Cap { d, from_a, len, depth } => {
+                    GroupPlan::Cap {
+                        d,
+                        from_a,
+                        len,
+                        depth,
+                    } => {
                         let z = if *from_a { t * h } else { (1.0 - t) * h };
                         if let Some(off) = dome(z, *len, *depth) {
                             any = true;
@@ -505,10 +652,19 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
     } = x;
     // The moving frame: a point x on the skipped slice sits at x - tΔ on A
     // and x + (1 - t)Δ on B; the drift per unit length is Δ / h.
-    let (sa, sb) = ([-t * delta[0], -t * delta[1]], [(1.0 - t) * delta[0], (1.0 - t) * delta[1]]);
+    let (sa, sb) = (
+        [-t * delta[0], -t * delta[1]],
+        [(1.0 - t) * delta[0], (1.0 - t) * delta[1]],
+    );
     // Region that can be inside: both crops moved onto this slice.
-    let u0 = (ca.u0 as f64 - sa[0]).min(cb.u0 as f64 - sb[0]).floor().max(0.0) as usize;
-    let v0 = (ca.v0 as f64 - sa[1]).min(cb.v0 as f64 - sb[1]).floor().max(0.0) as usize;
+    let u0 = (ca.u0 as f64 - sa[0])
+        .min(cb.u0 as f64 - sb[0])
+        .floor()
+        .max(0.0) as usize;
+    let v0 = (ca.v0 as f64 - sa[1])
+        .min(cb.v0 as f64 - sb[1])
+        .floor()
+        .max(0.0) as usize;
     let u1 = ((ca.u0 + ca.w) as f64 - sa[0])
         .max((cb.u0 + cb.w) as f64 - sb[0])
         .ceil()
@@ -520,7 +676,12 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
     let (hf, tf) = (h as f32, t as f32);
     let t2 = tf * tf;
     let t3 = t2 * tf;
-    let (h00, h10, h01, h11) = (2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + tf, -2.0 * t3 + 3.0 * t2, t3 - t2);
+    let (h00, h10, h01, h11) = (
+        2.0 * t3 - 3.0 * t2 + 1.0,
+        t3 - 2.0 * t2 + tf,
+        -2.0 * t3 + 3.0 * t2,
+        t3 - t2,
+    );
     for v in v0..v1 {
         for u in u0..u1 {
             let (pu, pv) = (u as f64, v as f64);
@@ -534,7 +695,12 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
                 Some(n) => {
                     let k = n.h / h;
                     let wa = sample_full(full_a, plane, pu + sa[0], pv + sa[1]);
-                    let wp = sample_full(n.sdf, plane, pu + sa[0] - k * delta[0], pv + sa[1] - k * delta[1]);
+                    let wp = sample_full(
+                        n.sdf,
+                        plane,
+                        pu + sa[0] - k * delta[0],
+                        pv + sa[1] - k * delta[1],
+                    );
                     pchip_slope((wa - wp) / n.h as f32, sec, n.h as f32, hf)
                 }
                 None => sec,
@@ -543,7 +709,12 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
                 Some(n) => {
                     let k = n.h / h;
                     let wb = sample_full(full_b, plane, pu + sb[0], pv + sb[1]);
-                    let wn = sample_full(n.sdf, plane, pu + sb[0] + k * delta[0], pv + sb[1] + k * delta[1]);
+                    let wn = sample_full(
+                        n.sdf,
+                        plane,
+                        pu + sb[0] + k * delta[0],
+                        pv + sb[1] + k * delta[1],
+                    );
                     pchip_slope(sec, (wn - wb) / n.h as f32, hf, n.h as f32)
                 }
                 None => sec,

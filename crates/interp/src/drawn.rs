@@ -13,7 +13,10 @@ pub fn nonempty_slices(volume: &LabelVolume, axis: Axis) -> Vec<usize> {
     let mut hit = vec![false; n];
     match axis {
         Axis::Z => {
-            hit = data.par_chunks(nx * ny).map(|p| p.iter().any(|&v| v != 0)).collect();
+            hit = data
+                .par_chunks(nx * ny)
+                .map(|p| p.iter().any(|&v| v != 0))
+                .collect();
         }
         Axis::Y | Axis::X => {
             // One pass over z-planes in parallel, OR-ed per slice index.

@@ -28,7 +28,9 @@ pub fn interpolate_labels(
     drawn.dedup();
     let n = sparse.slice_count(axis);
     if let Some(&bad) = drawn.iter().find(|&&d| d >= n) {
-        return Err(InterpError::Input(format!("drawn slice {axis}={bad} is out of range (0..{n})")));
+        return Err(InterpError::Input(format!(
+            "drawn slice {axis}={bad} is out of range (0..{n})"
+        )));
     }
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
@@ -51,11 +53,14 @@ pub fn interpolate_labels(
     let mut out: LabelVolume = Volume::zeros(sparse.geometry().clone());
     for (l, m) in labels.iter().zip(masks) {
         let m = m?;
-        out.data_mut().par_iter_mut().zip(m.data().par_iter()).for_each(|(o, &inside)| {
-            if inside {
-                *o = *l;
-            }
-        });
+        out.data_mut()
+            .par_iter_mut()
+            .zip(m.data().par_iter())
+            .for_each(|(o, &inside)| {
+                if inside {
+                    *o = *l;
+                }
+            });
     }
     Ok(out)
 }

@@ -26,7 +26,10 @@ pub fn by_name(name: &str) -> Result<Box<dyn Interpolator>, InterpError> {
     let all = methods();
     let names: Vec<&'static str> = all.iter().map(|m| m.name()).collect();
     all.into_iter().find(|m| m.name() == name).ok_or_else(|| {
-        InterpError::Input(format!("unknown method '{name}' (valid: {})", names.join(", ")))
+        InterpError::Input(format!(
+            "unknown method '{name}' (valid: {})",
+            names.join(", ")
+        ))
     })
 }
 
@@ -49,7 +52,10 @@ mod tests {
     #[test]
     fn unknown_name_lists_the_valid_ones() {
         let e = by_name("nope").err().expect("unknown method").to_string();
-        assert!(e.contains("nope") && e.contains("shape-based") && e.contains("linear"), "{e}");
+        assert!(
+            e.contains("nope") && e.contains("shape-based") && e.contains("linear"),
+            "{e}"
+        );
         assert_eq!(by_name("linear").unwrap().name(), "linear");
     }
 }

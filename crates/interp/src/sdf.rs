@@ -1,7 +1,9 @@
 //! Signed distance maps of drawn slices, the common ground of the shape-based
 //! methods (Raya & Udupa 1990; Herman et al. 1992).
+use crate::SparseMask;
 use crate::slices::Plane;
 use interslice_core::edt::squared_edt_2d_f32;
+use rayon::prelude::*;
 
 /// Signed distance of every pixel of a row-major slice, in physical units:
 /// negative inside (minus the distance to the nearest background pixel
@@ -41,4 +43,81 @@ pub fn empty_value(plane: &Plane) -> f32 {
     let a = plane.width as f64 * plane.spacing[0];
     let b = plane.height as f64 * plane.spacing[1];
     (a.hypot(b) + plane.spacing[0] + plane.spacing[1]) as f32
+}
+
+/// Signed distance maps of the drawn slices of `input`, computed where
+/// `needed[i]` is true (`None` elsewhere), with drawn-empty slices handled.
+///
+/// A drawn slice without foreground is not "infinitely far" from the objects
+/// of its neighbours: blending with a constant far value would cut every
+/// object off right after the last slice that shows it. Instead an empty
+/// drawn slice gets, per pixel, the smallest of `d_N + depth_N` over its
+/// non-empty drawn neighbours `N` (the previous and next drawn slices), where
+/// `depth_N` is the deepest inside distance of `N`. That map is `>= 0`
+/// everywhere (the empty slice stays empty, `< 0` is never true on it) and
+/// touches 0 at the deepest point of the neighbour, so a linear blend erodes
+/// the object to a point on the empty slice: a cone, not a cut. An empty
+/// slice without non-empty neighbours gets [`empty_value`].
+pub fn drawn_maps(input: &SparseMask<'_>, plane: &Plane, needed: &[bool]) -> Vec<Option<Vec<f32>>> {
+    let d = input.drawn;
+    let n = d.len();
+    let masks: Vec<Option<Vec<bool>>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let wanted = needed[i] || (i > 0 && needed[i - 1]) || (i + 1 < n && needed[i + 1]);
+            wanted.then(|| {
+                input
+                    .mask
+                    .slice(input.axis, d[i])
+                    .expect("validated drawn index")
+            })
+        })
+        .collect();
+    let empty: Vec<bool> = masks
+        .iter()
+        .map(|m| m.as_ref().is_some_and(|m| !m.iter().any(|&x| x)))
+        .collect();
+    // Non-empty slices whose map is needed themselves or by an empty neighbour.
+    let compute: Vec<bool> = (0..n)
+        .map(|i| {
+            masks[i].is_some()
+                && !empty[i]
+                && (needed[i]
+                    || (i > 0 && needed[i - 1] && empty[i - 1])
+                    || (i + 1 < n && needed[i + 1] && empty[i + 1]))
+        })
+        .collect();
+    let sdfs: Vec<Option<Vec<f32>>> = (0..n)
+        .into_par_iter()
+        .map(|i| compute[i].then(|| signed_distance(masks[i].as_ref().expect("read"), plane)))
+        .collect();
+    let depth = |m: &[f32]| -m.iter().copied().fold(0.0f32, f32::min);
+    let far = empty_value(plane);
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if !needed[i] {
+                return None;
+            }
+            if !empty[i] {
+                return sdfs[i].clone();
+            }
+            let neighbours: Vec<&Vec<f32>> = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
+                .into_iter()
+                .flatten()
+                .filter_map(|j| sdfs[j].as_ref().filter(|_| !empty[j]))
+                .collect();
+            if neighbours.is_empty() {
+                return Some(vec![far; plane.len()]);
+            }
+            let mut out = vec![far; plane.len()];
+            for m in neighbours {
+                let r = depth(m);
+                for (o, &x) in out.iter_mut().zip(m.iter()) {
+                    *o = o.min(x + r);
+                }
+            }
+            Some(out)
+        })
+        .collect()
 }

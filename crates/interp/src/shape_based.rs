@@ -3,14 +3,17 @@
 //!
 //! Each drawn slice becomes a signed distance map in physical units (spacing
 //! respected); a skipped slice at fraction `t` between drawn slices A and B is
-//! `(1 - t) d_A + t d_B < 0`. Nothing is produced outside the drawn range. An
-//! object present on A and drawn-absent on B shrinks only slightly past A (the
-//! empty slice's distance is "far"), which is the method's known limit.
-use crate::sdf::signed_distance;
+//! `(1 - t) d_A + t d_B < 0`. Nothing is produced outside the drawn range.
+//!
+//! A drawn slice without the object is given the map described in
+//! [`crate::sdf::drawn_maps`]: the object erodes to a point on the empty slice
+//! (a cone) instead of being cut off right after the last slice showing it.
+//! Objects are not matched: a shifted object is blended into the overlap of
+//! its two positions, and an object on one side only is coned, not capped.
+use crate::sdf::drawn_maps;
 use crate::slices::{Plane, assemble, bracket};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
-use rayon::prelude::*;
 
 /// Linear blending of signed distance maps.
 #[derive(Debug, Default, Clone, Copy)]
@@ -31,15 +34,7 @@ pub fn drawn_sdfs(input: &SparseMask<'_>, plane: &Plane, extra: usize) -> Vec<Op
             }
         }
     }
-    (0..n)
-        .into_par_iter()
-        .map(|i| {
-            needed[i].then(|| {
-                let m = input.mask.slice(input.axis, d[i]).expect("validated drawn index");
-                signed_distance(&m, plane)
-            })
-        })
-        .collect()
+    drawn_maps(input, plane, &needed)
 }
 
 impl Interpolator for ShapeBased {
@@ -62,7 +57,12 @@ impl Interpolator for ShapeBased {
             let t = ((s - a) as f64 / (b - a) as f64) as f32;
             let da = sdfs[g].as_ref().expect("gap border");
             let db = sdfs[g + 1].as_ref().expect("gap border");
-            Some(da.iter().zip(db).map(|(&x, &y)| (1.0 - t) * x + t * y < 0.0).collect())
+            Some(
+                da.iter()
+                    .zip(db)
+                    .map(|(&x, &y)| (1.0 - t) * x + t * y < 0.0)
+                    .collect(),
+            )
         }))
     }
 }

@@ -60,8 +60,18 @@ impl Interpolator for ShapeCubic {
             let t = (s - drawn[g]) as f32 / (drawn[g + 1] - drawn[g]) as f32;
             let y0 = sdfs[g].as_ref().expect("gap border");
             let y1 = sdfs[g + 1].as_ref().expect("gap border");
-            let prev = (g > 0).then(|| (sdfs[g - 1].as_ref().expect("gap neighbour"), z(g) - z(g - 1)));
-            let next = (g + 2 < n).then(|| (sdfs[g + 2].as_ref().expect("gap neighbour"), z(g + 2) - z(g + 1)));
+            let prev = (g > 0).then(|| {
+                (
+                    sdfs[g - 1].as_ref().expect("gap neighbour"),
+                    z(g) - z(g - 1),
+                )
+            });
+            let next = (g + 2 < n).then(|| {
+                (
+                    sdfs[g + 2].as_ref().expect("gap neighbour"),
+                    z(g + 2) - z(g + 1),
+                )
+            });
             let mut out = vec![false; plane.len()];
             for p in 0..plane.len() {
                 let (a, b) = (y0[p], y1[p]);

@@ -48,7 +48,12 @@ pub fn drawn_slices(input: &SparseMask<'_>) -> Vec<Vec<bool>> {
     input
         .drawn
         .par_iter()
-        .map(|&d| input.mask.slice(input.axis, d).expect("validated drawn index"))
+        .map(|&d| {
+            input
+                .mask
+                .slice(input.axis, d)
+                .expect("validated drawn index")
+        })
         .collect()
 }
 
@@ -56,7 +61,10 @@ pub fn drawn_slices(input: &SparseMask<'_>) -> Vec<Vec<bool>> {
 /// slice from `produce(index)` (`None` = empty). Slices are produced in
 /// parallel; along z they are written in place, along x and y collected first
 /// and then scattered in parallel over z-planes.
-pub fn assemble(input: &SparseMask<'_>, produce: impl Fn(usize) -> Option<Vec<bool>> + Sync) -> Mask {
+pub fn assemble(
+    input: &SparseMask<'_>,
+    produce: impl Fn(usize) -> Option<Vec<bool>> + Sync,
+) -> Mask {
     let geometry = input.mask.geometry().clone();
     let axis = input.axis;
     let n = input.mask.slice_count(axis);
@@ -70,39 +78,45 @@ pub fn assemble(input: &SparseMask<'_>, produce: impl Fn(usize) -> Option<Vec<bo
     match axis {
         Axis::Z => {
             let plane = nx * ny;
-            out.data_mut().par_chunks_mut(plane).enumerate().for_each(|(k, chunk)| {
-                if is_drawn[k] {
-                    chunk.copy_from_slice(&src[k * plane..(k + 1) * plane]);
-                } else if let Some(s) = produce(k) {
-                    chunk.copy_from_slice(&s);
-                }
-            });
+            out.data_mut()
+                .par_chunks_mut(plane)
+                .enumerate()
+                .for_each(|(k, chunk)| {
+                    if is_drawn[k] {
+                        chunk.copy_from_slice(&src[k * plane..(k + 1) * plane]);
+                    } else if let Some(s) = produce(k) {
+                        chunk.copy_from_slice(&s);
+                    }
+                });
         }
         Axis::X | Axis::Y => {
             let slices: Vec<Option<Vec<bool>>> = (0..n)
                 .into_par_iter()
                 .map(|s| if is_drawn[s] { None } else { produce(s) })
                 .collect();
-            out.data_mut().par_chunks_mut(nx * ny).enumerate().for_each(|(k, chunk)| {
-                let base = k * nx * ny;
-                for j in 0..ny {
-                    for i in 0..nx {
-                        let idx = i + nx * j;
-                        let (s, u, v) = axis.split([i, j, k]);
-                        chunk[idx] = if is_drawn[s] {
-                            src[base + idx]
-                        } else {
-                            match &slices[s] {
-                                Some(buf) => {
-                                    let w = if axis == Axis::X { ny } else { nx };
-                                    buf[u + w * v]
+            out.data_mut()
+                .par_chunks_mut(nx * ny)
+                .enumerate()
+                .for_each(|(k, chunk)| {
+                    let base = k * nx * ny;
+                    for j in 0..ny {
+                        for i in 0..nx {
+                            let idx = i + nx * j;
+                            let (s, u, v) = axis.split([i, j, k]);
+                            chunk[idx] = if is_drawn[s] {
+                                src[base + idx]
+                            } else {
+                                match &slices[s] {
+                                    Some(buf) => {
+                                        let w = if axis == Axis::X { ny } else { nx };
+                                        buf[u + w * v]
+                                    }
+                                    None => false,
                                 }
-                                None => false,
-                            }
-                        };
+                            };
+                        }
                     }
-                }
-            });
+                });
         }
     }
     out

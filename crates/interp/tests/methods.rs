@@ -10,7 +10,11 @@ fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn(f64, f64, f64) -> 
     for k in 0..dims[2] {
         for j in 0..dims[1] {
             for i in 0..dims[0] {
-                let p = [(i as f64 + 0.5) * spacing[0], (j as f64 + 0.5) * spacing[1], (k as f64 + 0.5) * spacing[2]];
+                let p = [
+                    (i as f64 + 0.5) * spacing[0],
+                    (j as f64 + 0.5) * spacing[1],
+                    (k as f64 + 0.5) * spacing[2],
+                ];
                 m.set(i, j, k, inside(p[0], p[1], p[2]));
             }
         }
@@ -19,7 +23,10 @@ fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn(f64, f64, f64) -> 
 }
 
 fn ellipsoid(c: [f64; 3], r: [f64; 3]) -> impl Fn(f64, f64, f64) -> bool {
-    move |x, y, z| ((x - c[0]) / r[0]).powi(2) + ((y - c[1]) / r[1]).powi(2) + ((z - c[2]) / r[2]).powi(2) <= 1.0
+    move |x, y, z| {
+        ((x - c[0]) / r[0]).powi(2) + ((y - c[1]) / r[1]).powi(2) + ((z - c[2]) / r[2]).powi(2)
+            <= 1.0
+    }
 }
 
 /// Keep only the drawn slices of `full` along `axis`.
@@ -86,7 +93,12 @@ fn count_components(s: &[bool], w: usize, h: usize) -> usize {
     n
 }
 
-fn run(method: &dyn interslice_interp::Interpolator, full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
+fn run(
+    method: &dyn interslice_interp::Interpolator,
+    full: &Mask,
+    axis: Axis,
+    drawn: &[usize],
+) -> Mask {
     let sp = sparse(full, axis, drawn);
     method
         .interpolate(SparseMask {
@@ -100,10 +112,12 @@ fn run(method: &dyn interslice_interp::Interpolator, full: &Mask, axis: Axis, dr
 /// Minimum Dice from every 5th slice, per method: (ellipsoid, two-lobed nucleus).
 /// Methods not listed (added later) must reach the generic floor.
 const FLOORS: &[(&str, f64, f64)] = &[
-    ("linear", 0.955, 0.92),
-    ("shape-based", 0.955, 0.925),
-    ("shape-cubic", 0.955, 0.935),
-    ("shape-aligned", 0.955, 0.935),
+    // Measured: linear 0.9756 / 0.9395, shape-based 0.9706 / 0.9533,
+    // shape-cubic 0.9666 / 0.9510, shape-aligned 0.9739 / 0.9528.
+    ("linear", 0.97, 0.935),
+    ("shape-based", 0.965, 0.95),
+    ("shape-cubic", 0.96, 0.945),
+    ("shape-aligned", 0.97, 0.95),
 ];
 const GENERIC_FLOOR: f64 = 0.70;
 
@@ -116,14 +130,20 @@ fn floor(name: &str) -> (f64, f64) {
 }
 
 fn test_ellipsoid() -> Mask {
-    shape([36, 32, 40], [1.0, 1.0, 1.0], ellipsoid([18.0, 16.0, 20.0], [14.0, 11.0, 17.0]))
+    shape(
+        [36, 32, 40],
+        [1.0, 1.0, 1.0],
+        ellipsoid([18.0, 16.0, 20.0], [14.0, 11.0, 17.0]),
+    )
 }
 
 fn two_lobed() -> Mask {
     // Two overlapping spheres offset in x, y and z: lobes that tilt and merge.
     let a = ellipsoid([14.0, 14.0, 16.0], [10.0, 9.0, 11.0]);
     let b = ellipsoid([25.0, 20.0, 24.0], [9.0, 8.0, 10.0]);
-    shape([40, 34, 40], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z))
+    shape([40, 34, 40], [1.0, 1.0, 1.0], move |x, y, z| {
+        a(x, y, z) || b(x, y, z)
+    })
 }
 
 #[test]
@@ -150,7 +170,9 @@ fn drawn_slices_are_reproduced_and_drawn_empty_slices_stay_empty() {
     // along z) and whose outermost drawn slices are empty.
     let a = ellipsoid([14.0, 14.0, 10.0], [9.0, 8.0, 7.0]);
     let b = ellipsoid([18.0, 15.0, 27.0], [8.0, 9.0, 7.0]);
-    let gt = shape([32, 30, 36], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z));
+    let gt = shape([32, 30, 36], [1.0, 1.0, 1.0], move |x, y, z| {
+        a(x, y, z) || b(x, y, z)
+    });
     let drawn = vec![0, 5, 9, 14, 18, 23, 28, 31, 35];
     for m in methods() {
         let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
@@ -163,7 +185,10 @@ fn drawn_slices_are_reproduced_and_drawn_empty_slices_stay_empty() {
             );
         }
         for &d in &[0usize, 18, 35] {
-            assert!(gt.slice(Axis::Z, d).unwrap().iter().all(|&x| !x), "test setup: z={d} must be empty");
+            assert!(
+                gt.slice(Axis::Z, d).unwrap().iter().all(|&x| !x),
+                "test setup: z={d} must be empty"
+            );
         }
     }
 }
@@ -176,15 +201,28 @@ fn every_axis_with_anisotropic_spacing() {
         spacing[axis.dim()] = 2.0;
         let mut dims = [56, 48, 52];
         dims[axis.dim()] = [14, 12, 13][axis.dim()];
-        let gt = shape(dims, spacing, ellipsoid([14.0, 12.0, 13.0], [10.0, 8.0, 9.0]));
+        let gt = shape(
+            dims,
+            spacing,
+            ellipsoid([14.0, 12.0, 13.0], [10.0, 8.0, 9.0]),
+        );
         let drawn = every(gt.slice_count(axis), 3);
         for m in methods() {
             let out = run(m.as_ref(), &gt, axis, &drawn);
             let d = dice(&out, &gt);
-            let f = floor(m.name()).0 - 0.05;
+            // `linear` drops the object on the skipped slices between its
+            // last drawn slice and a drawn-empty one (x=10, 11 here: two of
+            // the ten slices of the ellipsoid's long axis), as the original did.
+            let slack = if m.name() == "linear" { 0.08 } else { 0.05 };
+            let f = floor(m.name()).0 - slack;
             assert!(d >= f, "{} along {axis}: Dice {d:.4} < {f}", m.name());
             for &k in &drawn {
-                assert_eq!(out.slice(axis, k).unwrap(), gt.slice(axis, k).unwrap(), "{} {axis}={k}", m.name());
+                assert_eq!(
+                    out.slice(axis, k).unwrap(),
+                    gt.slice(axis, k).unwrap(),
+                    "{} {axis}={k}",
+                    m.name()
+                );
             }
         }
     }
@@ -194,14 +232,21 @@ fn every_axis_with_anisotropic_spacing() {
 fn two_nucleoli_stay_two_objects() {
     let a = ellipsoid([10.0, 14.0, 12.0], [5.0, 5.0, 8.0]);
     let b = ellipsoid([23.0, 14.0, 13.0], [5.0, 5.0, 8.0]);
-    let gt = shape([34, 28, 26], [1.0, 1.0, 1.0], move |x, y, z| a(x, y, z) || b(x, y, z));
+    let gt = shape([34, 28, 26], [1.0, 1.0, 1.0], move |x, y, z| {
+        a(x, y, z) || b(x, y, z)
+    });
     let drawn = every(26, 5);
     for m in methods() {
         let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
         // Skipped slices whose bracketing drawn slices both show both.
         for k in [7usize, 8, 12, 13] {
             let s = out.slice(Axis::Z, k).unwrap();
-            assert_eq!(count_components(&s, 34, 28), 2, "{}: z={k} must show two nucleoli", m.name());
+            assert_eq!(
+                count_components(&s, 34, 28),
+                2,
+                "{}: z={k} must show two nucleoli",
+                m.name()
+            );
         }
     }
 }
@@ -213,7 +258,8 @@ fn a_u_shaped_object_is_recovered() {
     let gt = shape([40, 20, 40], [1.0, 1.0, 1.0], |x, y, z| {
         let in_y = (4.0..16.0).contains(&y);
         let bar = (4.0..36.0).contains(&x) && (4.0..14.0).contains(&z);
-        let arm = ((4.0..14.0).contains(&x) || (26.0..36.0).contains(&x)) && (4.0..36.0).contains(&z);
+        let arm =
+            ((4.0..14.0).contains(&x) || (26.0..36.0).contains(&x)) && (4.0..36.0).contains(&z);
         in_y && (bar || arm)
     });
     let drawn = every(40, 5);
@@ -224,11 +270,21 @@ fn a_u_shaped_object_is_recovered() {
         assert!(d >= f, "{}: U-shape Dice {d:.4} < {f}", m.name());
         for k in [21usize, 27, 33] {
             let s = out.slice(Axis::Z, k).unwrap();
-            assert_eq!(count_components(&s, 40, 20), 2, "{}: z={k} must show both arms", m.name());
+            assert_eq!(
+                count_components(&s, 40, 20),
+                2,
+                "{}: z={k} must show both arms",
+                m.name()
+            );
         }
         for k in [6usize, 8] {
             let s = out.slice(Axis::Z, k).unwrap();
-            assert_eq!(count_components(&s, 40, 20), 1, "{}: z={k} must show the bar", m.name());
+            assert_eq!(
+                count_components(&s, 40, 20),
+                1,
+                "{}: z={k} must show the bar",
+                m.name()
+            );
         }
     }
 }

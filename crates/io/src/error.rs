@@ -9,20 +9,21 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum IoError {
     /// The operating system refused to read the file (missing, permissions, ...).
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("cannot read {}: {cause}", path.display())]
     Read {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (part of the message, so not also reported as a source:
+        /// `anyhow`'s `{:#}` would print it twice).
+        cause: std::io::Error,
     },
     /// The operating system refused to write the file (or its temporary file).
-    #[error("cannot write {}: {source}", path.display())]
+    #[error("cannot write {}: {cause}", path.display())]
     Write {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (part of the message).
+        cause: std::io::Error,
     },
     /// The file is not a valid file of its format (truncated, inconsistent header, garbage).
     #[error("{}: {msg}", path.display())]
@@ -81,14 +82,14 @@ impl IoError {
         }
         IoError::Read {
             path: path.to_path_buf(),
-            source,
+            cause: source,
         }
     }
 
     pub(crate) fn write(path: &Path, source: std::io::Error) -> IoError {
         IoError::Write {
             path: path.to_path_buf(),
-            source,
+            cause: source,
         }
     }
 }

@@ -10,7 +10,11 @@ pub const MAX_HEADER: usize = 1 << 20;
 
 /// Read one line (without the line ending) of at most [`MAX_HEADER`] bytes;
 /// `None` at end of file. `consumed` counts the bytes read, line ending included.
-pub fn read_line<R: BufRead + ?Sized>(path: &Path, r: &mut R, consumed: &mut usize) -> Result<Option<String>, IoError> {
+pub fn read_line<R: BufRead + ?Sized>(
+    path: &Path,
+    r: &mut R,
+    consumed: &mut usize,
+) -> Result<Option<String>, IoError> {
     let mut buf = Vec::new();
     let n = std::io::Read::take(&mut *r, (MAX_HEADER + 1) as u64)
         .read_until(b'\n', &mut buf)
@@ -20,7 +24,10 @@ pub fn read_line<R: BufRead + ?Sized>(path: &Path, r: &mut R, consumed: &mut usi
     }
     *consumed += n;
     if *consumed > MAX_HEADER {
-        return Err(IoError::invalid(path, "header is too long (is this a text header at all?)"));
+        return Err(IoError::invalid(
+            path,
+            "header is too long (is this a text header at all?)",
+        ));
     }
     if buf.last() == Some(&b'\n') {
         buf.pop();
@@ -48,16 +55,36 @@ pub fn geometry_from_axes(
         let v = axes[c];
         let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         if !(n.is_finite() && n > 0.0) {
-            return Err(IoError::invalid(path, format!("axis {c} has a zero or invalid direction vector {v:?}")));
+            return Err(IoError::invalid(
+                path,
+                format!("axis {c} has a zero or invalid direction vector {v:?}"),
+            ));
         }
-        spacing[c] = n;
+        spacing[c] = snap(n);
         for r in 0..3 {
             direction[r][c] = v[r] / n + 0.0;
         }
     }
-    let g = Geometry { dims, spacing, unit, origin, direction };
-    g.validate().map_err(|e| IoError::invalid(path, e.to_string()))?;
+    let g = Geometry {
+        dims,
+        spacing,
+        unit,
+        origin,
+        direction,
+    };
+    g.validate()
+        .map_err(|e| IoError::invalid(path, e.to_string()))?;
     Ok(g)
+}
+
+/// A length computed as the norm of a vector (0.49999999999999994 from
+/// `(0.25, 0.4330127018922193, 0)`) snapped to its 15-significant-digit
+/// decimal when that is within 1e-15 relative: the value the file meant.
+fn snap(x: f64) -> f64 {
+    match format!("{x:.14e}").parse::<f64>() {
+        Ok(d) if (d - x).abs() <= 1e-15 * x.abs() => d,
+        _ => x,
+    }
 }
 
 /// Format a float so it reads back exactly (Rust's shortest round-trip form).

@@ -11,6 +11,7 @@
 pub mod error;
 pub mod raw;
 
+mod folder;
 mod header;
 mod meta;
 mod nii;
@@ -41,16 +42,26 @@ pub enum Format {
     Mhd,
     /// Multi-page TIFF with ImageJ metadata, `.tif` or `.tiff`.
     Tiff,
+    /// A folder of 2D PNG or TIFF slices (written as `slice_0000.png`, ...).
+    SliceFolder,
 }
 
 impl Format {
     /// The format of a path: by extension (case-insensitive), or
-    /// [`Format::SliceFolder`] for an existing directory or a path ending in `/`.
+    /// [`Format::SliceFolder`] for an existing directory, a path ending in
+    /// `/`, or a path that does not exist and whose name has no extension.
     pub fn of_path(path: &Path) -> Result<Format, IoError> {
+        let text = path.to_string_lossy();
+        if path.is_dir() || text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
+            return Ok(Format::SliceFolder);
+        }
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
+        if !name.is_empty() && !name.contains('.') && !path.exists() {
+            return Ok(Format::SliceFolder);
+        }
         if name.ends_with(".nii.gz") {
             Ok(Format::NiftiGz)
         } else if name.ends_with(".nii") {
@@ -83,6 +94,7 @@ impl Format {
             Format::Mha => "MetaImage",
             Format::Mhd => "MetaImage (detached)",
             Format::Tiff => "TIFF stack",
+            Format::SliceFolder => "slice folder",
         }
     }
 }
@@ -100,6 +112,7 @@ pub fn read_volume(path: &Path) -> Result<AnyVolume, IoError> {
         Format::Nrrd | Format::Nhdr => nrrd::read(path),
         Format::Mha | Format::Mhd => meta::read(path),
         Format::Tiff => tiff_stack::read(path),
+        Format::SliceFolder => folder::read(path),
     }
 }
 
@@ -111,10 +124,14 @@ pub fn write_volume(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
         Format::Nifti => nii::write(path, v, false),
         Format::NiftiGz => nii::write(path, v, true),
         Format::Nrrd => nrrd::write(path, v),
-        Format::Nhdr => Err(IoError::unsupported(path, "writing detached NRRD (.nhdr) is not supported; write .nrrd")),
+        Format::Nhdr => Err(IoError::unsupported(
+            path,
+            "writing detached NRRD (.nhdr) is not supported; write .nrrd",
+        )),
         Format::Mha => meta::write(path, v, true),
         Format::Mhd => meta::write(path, v, false),
         Format::Tiff => tiff_stack::write(path, v),
+        Format::SliceFolder => folder::write(path, v),
     }
 }
 

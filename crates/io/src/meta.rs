@@ -11,9 +11,9 @@
 //! `ElementSpacingUnits` line, which ITK ignores; without it the unit is mm.
 //! Write: `.mha` with zlib-compressed data, `.mhd` with an uncompressed `.raw`
 //! file of the same stem (data written first, then the header, both atomic).
+use crate::IoError;
 use crate::header::{self, num};
 use crate::raw::{self, Endian, RawType};
-use crate::IoError;
 use interslice_core::{AnyVolume, LengthUnit};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -29,7 +29,12 @@ fn raw_type(path: &Path, s: &str) -> Result<RawType, IoError> {
         "MET_INT" | "MET_LONG" => RawType::I32,
         "MET_FLOAT" => RawType::F32,
         "MET_DOUBLE" => RawType::F64,
-        other => return Err(IoError::unsupported(path, format!("MetaImage ElementType '{other}' is not supported"))),
+        other => {
+            return Err(IoError::unsupported(
+                path,
+                format!("MetaImage ElementType '{other}' is not supported"),
+            ));
+        }
     })
 }
 
@@ -61,11 +66,23 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             continue;
         }
         let Some((k, v)) = line.split_once('=') else {
-            return Err(IoError::invalid(path, "not a MetaImage file (header line without '=')"));
+            return Err(IoError::invalid(
+                path,
+                "not a MetaImage file (header line without '=')",
+            ));
         };
         let k = k.trim().to_string();
-        if fields.is_empty() && data_file.is_none() && !matches!(k.as_str(), "ObjectType" | "NDims" | "Comment" | "ObjectSubType") {
-            return Err(IoError::invalid(path, "not a MetaImage file (does not start with ObjectType or NDims)"));
+        if fields.is_empty()
+            && data_file.is_none()
+            && !matches!(
+                k.as_str(),
+                "ObjectType" | "NDims" | "Comment" | "ObjectSubType"
+            )
+        {
+            return Err(IoError::invalid(
+                path,
+                "not a MetaImage file (does not start with ObjectType or NDims)",
+            ));
         }
         if k == "ElementDataFile" {
             data_file = Some(v.trim().to_string());
@@ -73,23 +90,37 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         }
         fields.insert(k, v.trim().to_string());
     }
-    let data_file = data_file.ok_or_else(|| IoError::invalid(path, "MetaImage header has no ElementDataFile"))?;
+    let data_file = data_file
+        .ok_or_else(|| IoError::invalid(path, "MetaImage header has no ElementDataFile"))?;
     let get = |k: &str| fields.get(k).map(String::as_str);
-    let need = |k: &str| get(k).ok_or_else(|| IoError::invalid(path, format!("MetaImage header has no {k}")));
+    let need = |k: &str| {
+        get(k).ok_or_else(|| IoError::invalid(path, format!("MetaImage header has no {k}")))
+    };
 
     if let Some(o) = get("ObjectType")
         && o != "Image"
     {
-        return Err(IoError::unsupported(path, format!("MetaImage ObjectType '{o}' is not an image")));
+        return Err(IoError::unsupported(
+            path,
+            format!("MetaImage ObjectType '{o}' is not an image"),
+        ));
     }
-    let ndims: usize = need("NDims")?.parse().map_err(|_| IoError::invalid(path, "bad NDims"))?;
+    let ndims: usize = need("NDims")?
+        .parse()
+        .map_err(|_| IoError::invalid(path, "bad NDims"))?;
     if !(2..=3).contains(&ndims) {
-        return Err(IoError::unsupported(path, format!("{ndims}D MetaImage files are not supported (2D and 3D only)")));
+        return Err(IoError::unsupported(
+            path,
+            format!("{ndims}D MetaImage files are not supported (2D and 3D only)"),
+        ));
     }
     if let Some(c) = get("ElementNumberOfChannels")
         && c.trim() != "1"
     {
-        return Err(IoError::unsupported(path, format!("MetaImage with {c} channels per voxel is not supported")));
+        return Err(IoError::unsupported(
+            path,
+            format!("MetaImage with {c} channels per voxel is not supported"),
+        ));
     }
     let sizes: Vec<usize> = need("DimSize")?
         .split_whitespace()
@@ -97,7 +128,10 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         .collect::<Result<_, _>>()
         .map_err(|_| IoError::invalid(path, "bad DimSize"))?;
     if sizes.len() != ndims {
-        return Err(IoError::invalid(path, format!("DimSize has {} values for NDims {ndims}", sizes.len())));
+        return Err(IoError::invalid(
+            path,
+            format!("DimSize has {} values for NDims {ndims}", sizes.len()),
+        ));
     }
     let mut dims = [1usize; 3];
     dims[..ndims].copy_from_slice(&sizes);
@@ -115,11 +149,24 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                 .map_err(|_| IoError::invalid(path, format!("bad {k} '{s}'"))),
         }
     };
-    let spacing = vals("ElementSpacing")?.or(vals("ElementSize")?).unwrap_or_else(|| vec![1.0; ndims]);
-    let origin = vals("Offset")?.or(vals("Origin")?).or(vals("Position")?).unwrap_or_else(|| vec![0.0; ndims]);
-    let matrix = vals("TransformMatrix")?.or(vals("Rotation")?).or(vals("Orientation")?);
-    if spacing.len() != ndims || origin.len() != ndims || matrix.as_ref().is_some_and(|m| m.len() != ndims * ndims) {
-        return Err(IoError::invalid(path, "ElementSpacing, Offset or TransformMatrix has the wrong number of values"));
+    let spacing = vals("ElementSpacing")?
+        .or(vals("ElementSize")?)
+        .unwrap_or_else(|| vec![1.0; ndims]);
+    let origin = vals("Offset")?
+        .or(vals("Origin")?)
+        .or(vals("Position")?)
+        .unwrap_or_else(|| vec![0.0; ndims]);
+    let matrix = vals("TransformMatrix")?
+        .or(vals("Rotation")?)
+        .or(vals("Orientation")?);
+    if spacing.len() != ndims
+        || origin.len() != ndims
+        || matrix.as_ref().is_some_and(|m| m.len() != ndims * ndims)
+    {
+        return Err(IoError::invalid(
+            path,
+            "ElementSpacing, Offset or TransformMatrix has the wrong number of values",
+        ));
     }
     let mut axes = [[0.0; 3]; 3];
     let mut org = [0.0; 3];
@@ -144,46 +191,81 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     let geometry = header::geometry_from_axes(path, dims, axes, org, unit)?;
 
     if get("BinaryData").is_some_and(|b| !is_true(b)) {
-        return Err(IoError::unsupported(path, "MetaImage with ASCII data (BinaryData = False) is not supported"));
+        return Err(IoError::unsupported(
+            path,
+            "MetaImage with ASCII data (BinaryData = False) is not supported",
+        ));
     }
-    let endian = if get("BinaryDataByteOrderMSB").or(get("ElementByteOrderMSB")).is_some_and(is_true) {
+    let endian = if get("BinaryDataByteOrderMSB")
+        .or(get("ElementByteOrderMSB"))
+        .is_some_and(is_true)
+    {
         Endian::Big
     } else {
         Endian::Little
     };
     let compressed = get("CompressedData").is_some_and(is_true);
-    let header_size: i64 = get("HeaderSize").map(|s| s.trim().parse().unwrap_or(0)).unwrap_or(0);
+    let header_size: i64 = get("HeaderSize")
+        .map(|s| s.trim().parse().unwrap_or(0))
+        .unwrap_or(0);
 
-    let (mut reader, len, name): (Box<dyn std::io::BufRead>, u64, PathBuf) = if data_file == "LOCAL" {
-        let len = std::fs::metadata(path).map_err(|e| IoError::read(path, e))?.len();
-        (Box::new(r), len.saturating_sub(consumed as u64), path.to_path_buf())
+    let (mut reader, len, name): (Box<dyn std::io::BufRead>, u64, PathBuf) = if data_file == "LOCAL"
+    {
+        let len = std::fs::metadata(path)
+            .map_err(|e| IoError::read(path, e))?
+            .len();
+        (
+            Box::new(r),
+            len.saturating_sub(consumed as u64),
+            path.to_path_buf(),
+        )
     } else {
-        if data_file.starts_with("LIST") || data_file.contains('%') || data_file.split_whitespace().count() > 1 {
-            return Err(IoError::unsupported(path, "MetaImage with one data file per slice is not supported"));
+        if data_file.starts_with("LIST")
+            || data_file.contains('%')
+            || data_file.split_whitespace().count() > 1
+        {
+            return Err(IoError::unsupported(
+                path,
+                "MetaImage with one data file per slice is not supported",
+            ));
         }
         let p = Path::new(&data_file);
-        let p = if p.is_absolute() { p.to_path_buf() } else { path.parent().unwrap_or(Path::new(".")).join(p) };
-        let len = std::fs::metadata(&p).map_err(|e| IoError::read(&p, e))?.len();
+        let p = if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            path.parent().unwrap_or(Path::new(".")).join(p)
+        };
+        let len = std::fs::metadata(&p)
+            .map_err(|e| IoError::read(&p, e))?
+            .len();
         (Box::new(raw::open(&p)?), len, p)
     };
     let bytes = if compressed {
         let mut dec = flate2::read::ZlibDecoder::new(reader);
-        raw::read_exact_bounded(&name, &mut dec, nbytes)?
+        raw::read_data(&name, &mut dec, nbytes)?
     } else {
         let skip = if header_size == -1 {
-            len.checked_sub(nbytes as u64)
-                .ok_or_else(|| IoError::invalid(&name, format!("file is truncated: dims {dims:?} need {nbytes} bytes of data")))?
+            len.checked_sub(nbytes as u64).ok_or_else(|| {
+                IoError::invalid(
+                    &name,
+                    format!("file is truncated: dims {dims:?} need {nbytes} bytes of data"),
+                )
+            })?
         } else {
             header_size.max(0) as u64
         };
         if len < skip + nbytes as u64 {
             return Err(IoError::invalid(
                 &name,
-                format!("file is truncated: dims {dims:?} need {nbytes} bytes of data, {} are there", len.saturating_sub(skip)),
+                format!(
+                    "file is truncated: dims {dims:?} need {nbytes} bytes of data, {} are there",
+                    len.saturating_sub(skip)
+                ),
             ));
         }
-        std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink()).map_err(|e| IoError::read(&name, e))?;
-        raw::read_exact_bounded(&name, &mut reader, nbytes)?
+        std::io::copy(&mut (&mut reader).take(skip), &mut std::io::sink())
+            .map_err(|e| IoError::read(&name, e))?;
+        raw::read_data(&name, &mut reader, nbytes)?
     };
     raw::decode_volume(&name, geometry, t, endian, &bytes)
 }
@@ -200,18 +282,37 @@ fn unit_name(u: LengthUnit) -> &'static str {
 fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> String {
     let g = v.geometry();
     let d = g.direction;
-    let mut s = String::from("ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n");
+    let mut s = String::from(
+        "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n",
+    );
     match compressed {
-        Some(n) => s.push_str(&format!("CompressedData = True\nCompressedDataSize = {n}\n")),
+        Some(n) => s.push_str(&format!(
+            "CompressedData = True\nCompressedDataSize = {n}\n"
+        )),
         None => s.push_str("CompressedData = False\n"),
     }
-    let m: Vec<String> = (0..3).flat_map(|c| (0..3).map(move |r| num(d[r][c]))).collect();
+    let m: Vec<String> = (0..3)
+        .flat_map(|c| (0..3).map(move |r| num(d[r][c])))
+        .collect();
     s.push_str(&format!("TransformMatrix = {}\n", m.join(" ")));
-    s.push_str(&format!("Offset = {} {} {}\n", num(g.origin[0]), num(g.origin[1]), num(g.origin[2])));
+    s.push_str(&format!(
+        "Offset = {} {} {}\n",
+        num(g.origin[0]),
+        num(g.origin[1]),
+        num(g.origin[2])
+    ));
     s.push_str("CenterOfRotation = 0 0 0\n");
-    s.push_str(&format!("ElementSpacing = {} {} {}\n", num(g.spacing[0]), num(g.spacing[1]), num(g.spacing[2])));
+    s.push_str(&format!(
+        "ElementSpacing = {} {} {}\n",
+        num(g.spacing[0]),
+        num(g.spacing[1]),
+        num(g.spacing[2])
+    ));
     s.push_str(&format!("ElementSpacingUnits = {}\n", unit_name(g.unit)));
-    s.push_str(&format!("DimSize = {} {} {}\n", g.dims[0], g.dims[1], g.dims[2]));
+    s.push_str(&format!(
+        "DimSize = {} {} {}\n",
+        g.dims[0], g.dims[1], g.dims[2]
+    ));
     s.push_str(&format!("ElementType = {}\n", type_name(RawType::of(v))));
     s.push_str(&format!("ElementDataFile = {data_file}\n"));
     s
@@ -232,7 +333,10 @@ pub fn write(path: &Path, v: &AnyVolume, attached: bool) -> Result<(), IoError> 
         })
     } else {
         let raw_path = path.with_extension("raw");
-        let raw_name = raw_path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let raw_name = raw_path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         raw::write_atomic(&raw_path, |w| w.write_all(&data))?;
         let head = header_text(v, None, &raw_name);
         raw::write_atomic(path, |w| w.write_all(head.as_bytes()))

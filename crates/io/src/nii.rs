@@ -13,6 +13,7 @@
 //! stored values are returned unchanged; otherwise the volume is read as f32
 //! with `value * slope + inter` applied (the calibrated values are what the
 //! file means). Nothing is ever rescaled on write (slope 1, intercept 0).
+#![allow(clippy::needless_range_loop)] // 3x3 matrix code reads best with indices
 use crate::IoError;
 use crate::raw::{self, Endian, RawType};
 use flate2::read::MultiGzDecoder;
@@ -178,7 +179,7 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
     // Skip extensions up to the data.
     std::io::copy(&mut r.take(vox_offset - 348), &mut std::io::sink())
         .map_err(|e| IoError::read(path, e))?;
-    let bytes = raw::read_exact_bounded(path, r, nbytes)?;
+    let bytes = raw::read_data(path, r, nbytes)?;
 
     let geometry = geometry_of(path, &h, dims)?;
     let v = raw::decode_volume(path, geometry, t, endian, &bytes)?;
@@ -211,6 +212,12 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
     ))
 }
 
+/// An f32 header value as the f64 of its shortest decimal form, so a
+/// spacing of 0.35 stored as f32 reads back as 0.35 (not 0.3499999940...).
+fn decimal(x: f32) -> f64 {
+    format!("{x}").parse().unwrap_or(f64::from(x))
+}
+
 fn unit_of(xyzt_units: u8) -> LengthUnit {
     match xyzt_units & 0x07 {
         1 => LengthUnit::Metre,
@@ -223,7 +230,7 @@ fn unit_of(xyzt_units: u8) -> LengthUnit {
 fn geometry_of(path: &Path, h: &nifti::NiftiHeader, dims: [usize; 3]) -> Result<Geometry, IoError> {
     let mut spacing = [1.0f64; 3];
     for (a, s) in spacing.iter_mut().enumerate() {
-        let p = f64::from(h.pixdim[a + 1]).abs();
+        let p = decimal(h.pixdim[a + 1]).abs();
         // ITK also falls back to 1 for a zero or missing pixdim.
         if p.is_finite() && p > 0.0 {
             *s = p;
@@ -309,14 +316,20 @@ fn sform_is_rigid(h: &nifti::NiftiHeader) -> bool {
 
 fn sform_direction(h: &nifti::NiftiHeader) -> ([[f64; 3]; 3], [f64; 3]) {
     let cols = sform_columns(h);
-    let m = srow(h);
     let mut d = [[0.0; 3]; 3];
     for r in 0..3 {
         for c in 0..3 {
             d[r][c] = cols[c][r];
         }
     }
-    (d, [m[0][3], m[1][3], m[2][3]])
+    (
+        d,
+        [
+            decimal(h.srow_x[3]),
+            decimal(h.srow_y[3]),
+            decimal(h.srow_z[3]),
+        ],
+    )
 }
 
 fn qform_direction(h: &nifti::NiftiHeader) -> ([[f64; 3]; 3], [f64; 3]) {
@@ -357,9 +370,9 @@ fn qform_direction(h: &nifti::NiftiHeader) -> ([[f64; 3]; 3], [f64; 3]) {
     (
         r,
         [
-            f64::from(h.quatern_x),
-            f64::from(h.quatern_y),
-            f64::from(h.quatern_z),
+            decimal(h.quatern_x),
+            decimal(h.quatern_y),
+            decimal(h.quatern_z),
         ],
     )
 }

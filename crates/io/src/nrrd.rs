@@ -6,14 +6,17 @@
 //! direction (unit vectors), `space origin` the origin; an RAS or LAS `space`
 //! is turned into LPS (ITK's convention, like SimpleITK). Without `space`,
 //! `spacings` (and optional `axis mins`) are used with identity direction.
+//!
 //! 3D Slicer segmentations (`.seg.nrrd`) are read as their labelmap: a 3D
-//! file as is, a 4D file with one layer (first axis of kind `list` with size
-//! 1) squeezed to 3D; several layers (overlapping segments) are refused.
+//! file as is; a 4D file (first axis of kind `list`: one layer per entry)
+//! has its layers merged using each segment's `SegmentN_LabelValue` and
+//! `SegmentN_Layer` (see `merge_layers`). Other 4D files are refused.
+//!
 //! Write: `NRRD0004`, gzip, `space: left-posterior-superior`,
 //! `space directions`, `space origin`, `space units`.
+use crate::IoError;
 use crate::header::{self, num};
 use crate::raw::{self, Endian, RawType};
-use crate::IoError;
 use interslice_core::{AnyVolume, LengthUnit};
 use std::collections::HashMap;
 use std::io::{BufRead, Read, Write};
@@ -23,13 +26,20 @@ fn raw_type(path: &Path, s: &str) -> Result<RawType, IoError> {
     Ok(match s.trim() {
         "uchar" | "unsigned char" | "uint8" | "uint8_t" => RawType::U8,
         "signed char" | "int8" | "int8_t" => RawType::I8,
-        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => RawType::I16,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => {
+            RawType::I16
+        }
         "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => RawType::U16,
         "int" | "signed int" | "int32" | "int32_t" => RawType::I32,
         "uint" | "unsigned int" | "uint32" | "uint32_t" => RawType::U32,
         "float" => RawType::F32,
         "double" => RawType::F64,
-        other => return Err(IoError::unsupported(path, format!("NRRD type '{other}' is not supported"))),
+        other => {
+            return Err(IoError::unsupported(
+                path,
+                format!("NRRD type '{other}' is not supported"),
+            ));
+        }
     })
 }
 
@@ -63,7 +73,10 @@ fn vector(path: &Path, s: &str) -> Result<Option<[f64; 3]>, IoError> {
         .map_err(|_| IoError::invalid(path, format!("bad NRRD vector '{s}'")))?;
     match parts.as_slice() {
         [a, b, c] => Ok(Some([*a, *b, *c])),
-        _ => Err(IoError::unsupported(path, format!("NRRD vector '{s}' is not 3D"))),
+        _ => Err(IoError::unsupported(
+            path,
+            format!("NRRD vector '{s}' is not 3D"),
+        )),
     }
 }
 
@@ -98,8 +111,17 @@ fn vector_items(s: &str) -> Vec<String> {
 
 /// Strip the quotes of `"mm" "mm" "mm"`.
 fn quoted_items(s: &str) -> Vec<String> {
-    let items: Vec<String> = s.split('"').map(str::trim).filter(|x| !x.is_empty()).map(String::from).collect();
-    if items.is_empty() { s.split_whitespace().map(String::from).collect() } else { items }
+    let items: Vec<String> = s
+        .split('"')
+        .map(str::trim)
+        .filter(|x| !x.is_empty())
+        .map(String::from)
+        .collect();
+    if items.is_empty() {
+        s.split_whitespace().map(String::from).collect()
+    } else {
+        items
+    }
 }
 
 /// Read a NRRD file.
@@ -108,14 +130,15 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     let mut consumed = 0usize;
     let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
     if !first.starts_with("NRRD000") {
-        return Err(IoError::invalid(path, "not a NRRD file (no NRRD000x magic line)"));
+        return Err(IoError::invalid(
+            path,
+            "not a NRRD file (no NRRD000x magic line)",
+        ));
     }
     let mut fields: HashMap<String, String> = HashMap::new();
     let mut keys: HashMap<String, String> = HashMap::new();
-    loop {
-        let Some(line) = header::read_line(path, &mut r, &mut consumed)? else {
-            break; // end of file: a detached header may have no blank line
-        };
+    // A detached header may end at the end of the file, without a blank line.
+    while let Some(line) = header::read_line(path, &mut r, &mut consumed)? {
         if line.is_empty() {
             break;
         }
@@ -129,11 +152,16 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         } else if let Some(k) = line.strip_suffix(':') {
             fields.insert(k.trim().to_ascii_lowercase(), String::new());
         } else {
-            return Err(IoError::invalid(path, format!("bad NRRD header line '{line}'")));
+            return Err(IoError::invalid(
+                path,
+                format!("bad NRRD header line '{line}'"),
+            ));
         }
     }
     let get = |k: &str| fields.get(k).map(String::as_str);
-    let need = |k: &str| get(k).ok_or_else(|| IoError::invalid(path, format!("NRRD header has no '{k}' field")));
+    let need = |k: &str| {
+        get(k).ok_or_else(|| IoError::invalid(path, format!("NRRD header has no '{k}' field")))
+    };
 
     let t = raw_type(path, need("type")?)?;
     let dimension: usize = need("dimension")?
@@ -145,36 +173,59 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         .collect::<Result<_, _>>()
         .map_err(|_| IoError::invalid(path, "bad NRRD 'sizes'"))?;
     if sizes.len() != dimension {
-        return Err(IoError::invalid(path, format!("NRRD 'sizes' has {} values for dimension {dimension}", sizes.len())));
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "NRRD 'sizes' has {} values for dimension {dimension}",
+                sizes.len()
+            ),
+        ));
     }
-    let kinds: Vec<String> = get("kinds").map(|k| k.split_whitespace().map(str::to_ascii_lowercase).collect()).unwrap_or_default();
+    let kinds: Vec<String> = get("kinds")
+        .map(|k| k.split_whitespace().map(str::to_ascii_lowercase).collect())
+        .unwrap_or_default();
     // Which axes are spatial: a leading non-spatial axis of size 1 (a
     // single-layer Slicer segmentation, a 1-component list) is squeezed.
-    let dir_items: Vec<String> = get("space directions").map(vector_items).unwrap_or_default();
+    let dir_items: Vec<String> = get("space directions")
+        .map(vector_items)
+        .unwrap_or_default();
     let first_is_list = dimension == 4
-        && (kinds.first().is_some_and(|k| !matches!(k.as_str(), "domain" | "space"))
+        && (kinds
+            .first()
+            .is_some_and(|k| !matches!(k.as_str(), "domain" | "space"))
             || dir_items.first().is_some_and(|d| d == "none"));
-    let (skip, spatial) = match dimension {
-        1..=3 => (0usize, dimension),
+    let is_segmentation = keys.contains_key("Segment0_LabelValue")
+        || keys.contains_key("Segment0_Layer")
+        || keys.keys().any(|k| k.starts_with("Segmentation_"));
+    let (skip, spatial, layers) = match dimension {
+        1..=3 => (0usize, dimension, 1usize),
         4 if first_is_list => {
-            if sizes[0] != 1 {
-                let what = if keys.contains_key("Segment0_Layer") || keys.keys().any(|k| k.starts_with("Segmentation_")) {
+            if sizes[0] != 1 && !is_segmentation {
+                return Err(IoError::unsupported(
+                    path,
                     format!(
-                        "3D Slicer segmentation with {} layers (overlapping segments) is not supported; export it as a labelmap",
+                        "a 4D NRRD with {} components per voxel is not supported",
                         sizes[0]
-                    )
-                } else {
-                    format!("a 4D NRRD with {} components per voxel is not supported", sizes[0])
-                };
-                return Err(IoError::unsupported(path, what));
+                    ),
+                ));
             }
-            (1, 3)
+            (1, 3, sizes[0])
         }
-        _ => return Err(IoError::unsupported(path, format!("{dimension}D NRRD files are not supported (3D only)"))),
+        _ => {
+            return Err(IoError::unsupported(
+                path,
+                format!("{dimension}D NRRD files are not supported (3D only)"),
+            ));
+        }
     };
     let mut dims = [1usize; 3];
     dims[..spatial].copy_from_slice(&sizes[skip..skip + spatial]);
-    let nbytes = raw::checked_bytes(path, dims, t)?;
+    // All layers of a multi-layer segmentation are read at once, as if the
+    // layer axis (the fastest) were part of x.
+    let wide_x = dims[0]
+        .checked_mul(layers)
+        .ok_or_else(|| IoError::unsupported(path, format!("NRRD sizes {sizes:?} are too large")))?;
+    let nbytes = raw::checked_bytes(path, [wide_x, dims[1], dims[2]], t)?;
 
     let endian = match get("endian") {
         Some("big") => Endian::Big,
@@ -199,14 +250,21 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         if items.len() != dimension {
             return Err(IoError::invalid(
                 path,
-                format!("NRRD 'space directions' has {} items for dimension {dimension}", items.len()),
+                format!(
+                    "NRRD 'space directions' has {} items for dimension {dimension}",
+                    items.len()
+                ),
             ));
         }
         let mut axes = [[0.0; 3]; 3];
         for a in 0..3 {
             if a < spatial {
-                let v = vector(path, &items[skip + a])?
-                    .ok_or_else(|| IoError::invalid(path, format!("space direction of axis {} is 'none'", skip + a)))?;
+                let v = vector(path, &items[skip + a])?.ok_or_else(|| {
+                    IoError::invalid(
+                        path,
+                        format!("space direction of axis {} is 'none'", skip + a),
+                    )
+                })?;
                 axes[a] = [v[0] * flips[0], v[1] * flips[1], v[2] * flips[2]];
             } else {
                 axes[a][a] = 1.0;
@@ -215,7 +273,11 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         let origin = match get("space origin") {
             Some(o) => {
                 let v = vector(path, o)?.unwrap_or([0.0; 3]);
-                [v[0] * flips[0] + 0.0, v[1] * flips[1] + 0.0, v[2] * flips[2] + 0.0]
+                [
+                    v[0] * flips[0] + 0.0,
+                    v[1] * flips[1] + 0.0,
+                    v[2] * flips[2] + 0.0,
+                ]
             }
             None => [0.0; 3],
         };
@@ -224,36 +286,63 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         // No space: per-axis spacings (NaN for non-spatial axes).
         let mut axes = [[0.0; 3]; 3];
         let sp: Vec<f64> = get("spacings")
-            .map(|s| s.split_whitespace().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect())
+            .map(|s| {
+                s.split_whitespace()
+                    .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+                    .collect()
+            })
             .unwrap_or_default();
         let mins: Vec<f64> = get("axis mins")
-            .map(|s| s.split_whitespace().map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect())
+            .map(|s| {
+                s.split_whitespace()
+                    .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+                    .collect()
+            })
             .unwrap_or_default();
         let mut origin = [0.0; 3];
         for a in 0..3 {
-            let s = sp.get(skip + a).copied().filter(|s| s.is_finite() && *s > 0.0).unwrap_or(1.0);
+            let s = sp
+                .get(skip + a)
+                .copied()
+                .filter(|s| s.is_finite() && *s > 0.0)
+                .unwrap_or(1.0);
             axes[a][a] = s;
             if let Some(m) = mins.get(skip + a).filter(|m| m.is_finite()) {
                 origin[a] = *m;
             }
         }
-        let unit = if units.is_empty() { LengthUnit::Unknown } else { unit };
+        let unit = if units.is_empty() {
+            LengthUnit::Unknown
+        } else {
+            unit
+        };
         header::geometry_from_axes(path, dims, axes, origin, unit)?
     };
 
     let encoding = need("encoding")?.to_ascii_lowercase();
-    let byte_skip: i64 = get("byte skip").map(|s| s.trim().parse().unwrap_or(0)).unwrap_or(0);
-    let line_skip: usize = get("line skip").map(|s| s.trim().parse().unwrap_or(0)).unwrap_or(0);
+    let byte_skip: i64 = get("byte skip")
+        .map(|s| s.trim().parse().unwrap_or(0))
+        .unwrap_or(0);
+    let line_skip: usize = get("line skip")
+        .map(|s| s.trim().parse().unwrap_or(0))
+        .unwrap_or(0);
 
     // The data stream: attached (rest of this file) or detached.
     let data_path: Option<PathBuf> = match get("data file").or(get("datafile")) {
         Some(f) => {
             let f = f.trim();
             if f.starts_with("LIST") || f.split_whitespace().count() > 1 {
-                return Err(IoError::unsupported(path, "NRRD with several data files is not supported"));
+                return Err(IoError::unsupported(
+                    path,
+                    "NRRD with several data files is not supported",
+                ));
             }
             let p = Path::new(f);
-            Some(if p.is_absolute() { p.to_path_buf() } else { path.parent().unwrap_or(Path::new(".")).join(p) })
+            Some(if p.is_absolute() {
+                p.to_path_buf()
+            } else {
+                path.parent().unwrap_or(Path::new(".")).join(p)
+            })
         }
         None => None,
     };
@@ -263,7 +352,9 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             (Box::new(raw::open(p)?), len)
         }
         None => {
-            let len = std::fs::metadata(path).map_err(|e| IoError::read(path, e))?.len();
+            let len = std::fs::metadata(path)
+                .map_err(|e| IoError::read(path, e))?
+                .len();
             (Box::new(r), len.saturating_sub(consumed as u64))
         }
     };
@@ -271,15 +362,23 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     let mut skipped = 0usize;
     for _ in 0..line_skip {
         if header::read_line(data_name, &mut reader, &mut skipped)?.is_none() {
-            return Err(IoError::invalid(data_name, "file is truncated (line skip past the end)"));
+            return Err(IoError::invalid(
+                data_name,
+                "file is truncated (line skip past the end)",
+            ));
         }
     }
     let bytes = match encoding.as_str() {
         "raw" => {
             let skip_bytes = if byte_skip == -1 {
-                (data_len - skipped as u64).checked_sub(nbytes as u64).ok_or_else(|| {
-                    IoError::invalid(data_name, format!("file is truncated: dims {dims:?} need {nbytes} bytes of data"))
-                })?
+                (data_len - skipped as u64)
+                    .checked_sub(nbytes as u64)
+                    .ok_or_else(|| {
+                        IoError::invalid(
+                            data_name,
+                            format!("file is truncated: dims {dims:?} need {nbytes} bytes of data"),
+                        )
+                    })?
             } else {
                 byte_skip.max(0) as u64
             };
@@ -292,25 +391,27 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                     ),
                 ));
             }
-            std::io::copy(&mut (&mut reader).take(skip_bytes), &mut std::io::sink()).map_err(|e| IoError::read(data_name, e))?;
-            raw::read_exact_bounded(data_name, &mut reader, nbytes)?
+            std::io::copy(&mut (&mut reader).take(skip_bytes), &mut std::io::sink())
+                .map_err(|e| IoError::read(data_name, e))?;
+            raw::read_data(data_name, &mut reader, nbytes)?
         }
         "gzip" | "gz" => {
             let mut dec = flate2::read::MultiGzDecoder::new(reader);
             if byte_skip > 0 {
-                std::io::copy(&mut (&mut dec).take(byte_skip as u64), &mut std::io::sink()).map_err(|e| IoError::read(data_name, e))?;
+                std::io::copy(&mut (&mut dec).take(byte_skip as u64), &mut std::io::sink())
+                    .map_err(|e| IoError::read(data_name, e))?;
             }
-            raw::read_exact_bounded(data_name, &mut dec, nbytes)?
+            raw::read_data(data_name, &mut dec, nbytes)?
         }
         "ascii" | "text" | "txt" => {
             // Each value takes at least two characters: bound the text read.
-            let limit = (geometry.len() as u64).saturating_mul(64);
+            let limit = ((geometry.len() * layers) as u64).saturating_mul(64);
             let mut text = String::new();
             reader
                 .take(limit)
                 .read_to_string(&mut text)
                 .map_err(|e| IoError::read(data_name, e))?;
-            ascii_to_bytes(data_name, &text, t, geometry.len())?
+            ascii_to_bytes(data_name, &text, t, geometry.len() * layers)?
         }
         other => {
             return Err(IoError::unsupported(
@@ -319,24 +420,158 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             ));
         }
     };
-    let endian = if encoding.starts_with('a') || encoding.starts_with('t') { Endian::Little } else { endian };
-    raw::decode_volume(data_name, geometry, t, endian, &bytes)
+    let endian = if encoding.starts_with('a') || encoding.starts_with('t') {
+        Endian::Little
+    } else {
+        endian
+    };
+    if layers == 1 {
+        return raw::decode_volume(data_name, geometry, t, endian, &bytes);
+    }
+    let mut wide = geometry.clone();
+    wide.dims[0] *= layers;
+    let stacked = raw::decode_volume(data_name, wide, t, endian, &bytes)?
+        .to_labels()
+        .map_err(|e| IoError::invalid(path, format!("segmentation layers: {e}")))?;
+    merge_layers(path, &keys, layers, stacked.data(), geometry)
+}
+
+/// One segment of a 3D Slicer segmentation: the layer it lives in and its
+/// value there.
+struct Segment {
+    layer: usize,
+    value: u16,
+}
+
+/// The `SegmentN_LabelValue` / `SegmentN_Layer` keys of a 3D Slicer
+/// segmentation, in segment order.
+fn segments(path: &Path, keys: &HashMap<String, String>) -> Result<Vec<Segment>, IoError> {
+    let mut out = Vec::new();
+    for n in 0.. {
+        let Some(value) = keys.get(&format!("Segment{n}_LabelValue")) else {
+            break;
+        };
+        let value: u16 = value
+            .trim()
+            .parse()
+            .map_err(|_| IoError::invalid(path, format!("bad Segment{n}_LabelValue '{value}'")))?;
+        let layer: usize = match keys.get(&format!("Segment{n}_Layer")) {
+            Some(l) => l
+                .trim()
+                .parse()
+                .map_err(|_| IoError::invalid(path, format!("bad Segment{n}_Layer '{l}'")))?,
+            None => 0,
+        };
+        out.push(Segment { layer, value });
+    }
+    Ok(out)
+}
+
+/// Merge the layers of a multi-layer 3D Slicer segmentation into one label
+/// volume. A segment keeps its `LabelValue` when the label values of all
+/// segments are distinct, otherwise segment N becomes label N + 1. Where
+/// segments overlap, the one listed last wins (as in Slicer's export to a
+/// labelmap).
+fn merge_layers(
+    path: &Path,
+    keys: &HashMap<String, String>,
+    layers: usize,
+    stacked: &[u16],
+    geometry: interslice_core::Geometry,
+) -> Result<AnyVolume, IoError> {
+    use rayon::prelude::*;
+    let segs = segments(path, keys)?;
+    if segs.is_empty() {
+        return Err(IoError::invalid(
+            path,
+            format!("segmentation with {layers} layers has no Segment0_LabelValue key"),
+        ));
+    }
+    if let Some(s) = segs.iter().find(|s| s.layer >= layers) {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "a segment is in layer {} but the file has {layers} layers",
+                s.layer
+            ),
+        ));
+    }
+    let mut values: Vec<u16> = segs.iter().map(|s| s.value).collect();
+    values.sort_unstable();
+    let distinct = values.windows(2).all(|w| w[0] != w[1]);
+    let out_label: Vec<u16> = segs
+        .iter()
+        .enumerate()
+        .map(|(n, s)| if distinct { s.value } else { (n + 1) as u16 })
+        .collect();
+    // table[layer][value] = segment index + 1 (0: no segment).
+    let mut table = vec![vec![0u32; 65536]; layers];
+    for (n, s) in segs.iter().enumerate() {
+        if s.value != 0 {
+            table[s.layer][usize::from(s.value)] = n as u32 + 1;
+        }
+    }
+    let merged: Result<Vec<u16>, (usize, u16)> = stacked
+        .par_chunks_exact(layers)
+        .map(|voxel| {
+            let mut best = 0u32;
+            for (l, &x) in voxel.iter().enumerate() {
+                if x != 0 {
+                    match table[l][usize::from(x)] {
+                        0 => return Err((l, x)),
+                        n => best = best.max(n),
+                    }
+                }
+            }
+            Ok(if best == 0 {
+                0
+            } else {
+                out_label[best as usize - 1]
+            })
+        })
+        .collect();
+    let merged = merged.map_err(|(l, x)| {
+        IoError::invalid(
+            path,
+            format!("layer {l} has value {x}, which no segment names"),
+        )
+    })?;
+    let max = merged.par_iter().copied().max().unwrap_or(0);
+    let bad = |e: interslice_core::CoreError| IoError::invalid(path, e.to_string());
+    Ok(if max <= u16::from(u8::MAX) {
+        AnyVolume::U8(
+            interslice_core::Volume::from_vec(geometry, merged.iter().map(|&x| x as u8).collect())
+                .map_err(bad)?,
+        )
+    } else {
+        AnyVolume::U16(interslice_core::Volume::from_vec(geometry, merged).map_err(bad)?)
+    })
 }
 
 fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u8>, IoError> {
     let mut out = Vec::with_capacity(n * t.size());
     let mut count = 0usize;
     for tok in text.split_whitespace().take(n) {
-        let x: f64 = tok.parse().map_err(|_| IoError::invalid(path, format!("bad number '{tok}' in ASCII data")))?;
+        let x: f64 = tok
+            .parse()
+            .map_err(|_| IoError::invalid(path, format!("bad number '{tok}' in ASCII data")))?;
         let ok_int = |lo: f64, hi: f64| x.fract() == 0.0 && x >= lo && x <= hi;
         let bad = || IoError::invalid(path, format!("value {tok} does not fit the NRRD type"));
         match t {
             RawType::U8 if ok_int(0.0, 255.0) => out.push(x as u8),
             RawType::I8 if ok_int(-128.0, 127.0) => out.push(x as i8 as u8),
-            RawType::U16 if ok_int(0.0, 65535.0) => out.extend_from_slice(&(x as u16).to_le_bytes()),
-            RawType::I16 if ok_int(-32768.0, 32767.0) => out.extend_from_slice(&(x as i16).to_le_bytes()),
-            RawType::U32 if ok_int(0.0, 4294967295.0) => out.extend_from_slice(&(x as u32).to_le_bytes()),
-            RawType::I32 if ok_int(-2147483648.0, 2147483647.0) => out.extend_from_slice(&(x as i32).to_le_bytes()),
+            RawType::U16 if ok_int(0.0, 65535.0) => {
+                out.extend_from_slice(&(x as u16).to_le_bytes())
+            }
+            RawType::I16 if ok_int(-32768.0, 32767.0) => {
+                out.extend_from_slice(&(x as i16).to_le_bytes())
+            }
+            RawType::U32 if ok_int(0.0, 4294967295.0) => {
+                out.extend_from_slice(&(x as u32).to_le_bytes())
+            }
+            RawType::I32 if ok_int(-2147483648.0, 2147483647.0) => {
+                out.extend_from_slice(&(x as i32).to_le_bytes())
+            }
             RawType::F32 => out.extend_from_slice(&(x as f32).to_le_bytes()),
             RawType::F64 => out.extend_from_slice(&x.to_le_bytes()),
             _ => return Err(bad()),
@@ -344,7 +579,10 @@ fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u
         count += 1;
     }
     if count < n {
-        return Err(IoError::invalid(path, format!("file is truncated: ASCII data has {count} of {n} values")));
+        return Err(IoError::invalid(
+            path,
+            format!("file is truncated: ASCII data has {count} of {n} values"),
+        ));
     }
     Ok(out)
 }

@@ -37,7 +37,13 @@ pub struct Stack {
 
 impl Stack {
     /// Add a plane of `width` x `height` read from `path` (named in errors).
-    pub fn push(&mut self, path: &Path, width: usize, height: usize, plane: Plane) -> Result<(), IoError> {
+    pub fn push(
+        &mut self,
+        path: &Path,
+        width: usize,
+        height: usize,
+        plane: Plane,
+    ) -> Result<(), IoError> {
         match self.size {
             Some(s) if s != (width, height) => {
                 return Err(IoError::invalid(

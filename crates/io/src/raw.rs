@@ -106,6 +106,31 @@ pub fn read_exact_bounded<R: Read + ?Sized>(
     Ok(buf)
 }
 
+/// Read exactly `len` bytes of voxel data that must be all the stream holds:
+/// fewer is a truncated file, more means the header's dims do not match the
+/// data. Reading to the end also checks a gzip or zlib stream's checksum.
+/// At most one small buffer past `len` is read, so a stream that inflates
+/// without end is refused at once.
+pub fn read_data<R: Read + ?Sized>(path: &Path, r: &mut R, len: usize) -> Result<Vec<u8>, IoError> {
+    let buf = read_exact_bounded(path, r, len)?;
+    let mut extra = [0u8; 4096];
+    loop {
+        match r.read(&mut extra) {
+            Ok(0) => return Ok(buf),
+            Ok(_) => {
+                return Err(IoError::invalid(
+                    path,
+                    format!(
+                        "the voxel data is longer than the {len} bytes the header's dims need (dims do not match the data)"
+                    ),
+                ));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(IoError::read(path, e)),
+        }
+    }
+}
+
 fn decode<T: Send, const N: usize>(
     bytes: &[u8],
     endian: Endian,
@@ -264,6 +289,16 @@ pub fn write_atomic(
         f(&mut w).map_err(|e| IoError::write(path, e))?;
         w.flush().map_err(|e| IoError::write(path, e))?;
     }
+    // A temporary file is created private (0600); give the result the
+    // permissions a plain `File::create` would.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = 0o666 & !umask();
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(mode))
+            .map_err(|e| IoError::write(path, e))?;
+    }
     tmp.as_file()
         .sync_all()
         .map_err(|e| IoError::write(path, e))?;
@@ -281,7 +316,7 @@ pub fn open(path: &Path) -> Result<std::io::BufReader<std::fs::File>, IoError> {
 /// The process umask (read from /proc; 022 when it cannot be read), so
 /// written files get the permissions a plain `File::create` would give.
 #[cfg(unix)]
-fn umask() -> u32 {
+pub(crate) fn umask() -> u32 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {

@@ -53,11 +53,14 @@ fn value_counts(v: &AnyVolume) -> Option<Vec<(i64, u64)>> {
     )
 }
 
+/// A number for people: at most 9 significant digits, so float noise such
+/// as `2.0999999999999996` prints as `2.1`.
 fn fmt_num(x: f64) -> String {
-    // Shortest representation that round-trips (no "0.35000000000000003" from f32 noise
-    // is possible here: values are f64 read from the file).
-    let s = format!("{x}");
-    if s.len() > 12 { format!("{x:.6}") } else { s }
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let rounded: f64 = format!("{x:.8e}").parse().unwrap_or(x);
+    format!("{}", rounded + 0.0)
 }
 
 /// Run `info`.
@@ -68,6 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (min, max) = v.min_max();
     let unit = g.unit.symbol();
     let counts = value_counts(&v);
+    let distinct = counts.as_ref().map(Vec::len);
     let labels: Option<Vec<(i64, u64)>> = counts.and_then(|c| {
         let all_labels = c.iter().all(|&(val, _)| val >= 0);
         if all_labels && (args.labels || c.len() <= MAX_AUTO_LABELS) {
@@ -109,7 +113,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "dtype": v.type_name(),
             "min": min,
             "max": max,
+            "voxels": g.len(),
             "voxel_volume": voxel_volume,
+            "volume_unit": format!("{unit}³"),
+            "distinct_values": distinct,
             "labels": labels_json,
         });
         println!(
@@ -157,6 +164,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         fmt_num(nz as f64 * sz),
         fmt_num(voxel_volume)
     );
+    if labels.is_none()
+        && let Some(n) = distinct
+    {
+        println!(
+            "labels:     not listed ({n} distinct values; --labels lists them when none is negative)"
+        );
+    }
     if let Some(labels) = labels {
         println!("labels:     {}", labels.len());
         if !labels.is_empty() {
@@ -175,4 +189,52 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use interslice_core::{Geometry, LengthUnit, Volume};
+
+    #[test]
+    fn numbers_print_without_float_noise() {
+        assert_eq!(fmt_num(3.0 * 0.7), "2.1");
+        assert_eq!(fmt_num(0.35 * 0.35 * 0.35), "0.042875");
+        assert_eq!(fmt_num(1e-9), "0.000000001");
+        assert_eq!(fmt_num(12345.0), "12345");
+        assert_eq!(fmt_num(-0.0), "0");
+    }
+
+    #[test]
+    fn counts_every_integer_value() {
+        let g = Geometry::new([2, 2, 1], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let v = AnyVolume::I16(Volume::from_vec(g.clone(), vec![-3, 0, 0, 7]).unwrap());
+        assert_eq!(value_counts(&v), Some(vec![(-3, 1), (0, 2), (7, 1)]));
+        let f = AnyVolume::F32(Volume::from_vec(g, vec![0.0; 4]).unwrap());
+        assert_eq!(value_counts(&f), None);
+    }
+
+    #[test]
+    fn runs_on_a_label_volume_and_a_missing_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("l.nrrd");
+        let g = Geometry::new([2, 2, 1], [0.5; 3], LengthUnit::Micrometre).unwrap();
+        let v = AnyVolume::U8(Volume::from_vec(g, vec![0, 1, 1, 2]).unwrap());
+        interslice_io::write_volume(&p, &v).unwrap();
+        for json in [false, true] {
+            run(Args {
+                input: p.clone(),
+                json,
+                labels: false,
+            })
+            .unwrap();
+        }
+        let missing = Args {
+            input: dir.path().join("none.nrrd"),
+            json: true,
+            labels: false,
+        };
+        let e = format!("{:#}", run(missing).unwrap_err());
+        assert!(e.contains("none.nrrd") && !e.contains('\n'), "{e}");
+    }
 }

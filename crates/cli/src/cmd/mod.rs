@@ -1,2 +1,8 @@
 //! One module per subcommand.
+pub mod contours;
+pub mod convert;
+pub mod evaluate;
 pub mod info;
+pub mod interpolate;
+pub mod phantom;
+pub mod study;

@@ -34,6 +34,26 @@ impl<T: Copy + PartialEq + Sync> MaskView for EqualTo<'_, T> {
     }
 }
 
+/// The voxels of `data` that are not zero (any label): the union of all labels.
+#[derive(Debug, Clone, Copy)]
+pub struct NonZero<'a, T> {
+    /// Voxels, x-fastest.
+    pub data: &'a [T],
+    /// Dims `(nx, ny, nz)`; `data.len()` must be their product.
+    pub dims: [usize; 3],
+}
+
+impl<T: Copy + PartialEq + Default + Sync> MaskView for NonZero<'_, T> {
+    #[inline]
+    fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+    #[inline]
+    fn fg(&self, idx: usize) -> bool {
+        self.data[idx] != T::default()
+    }
+}
+
 /// True when voxel `(i, j, k)` is a border voxel of `m`.
 #[inline]
 pub fn is_border<M: MaskView>(m: &M, i: usize, j: usize, k: usize) -> bool {

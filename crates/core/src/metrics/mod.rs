@@ -24,8 +24,8 @@ pub mod overlap;
 pub mod stats;
 pub mod surface;
 
-pub use border::{BoundingBox, EqualTo, MaskView};
-pub use overlap::{Confusion, LabelHistograms, confusion_of};
+pub use border::{BoundingBox, EqualTo, MaskView, NonZero};
+pub use overlap::{Confusion, LabelHistograms, confusion_of, confusion_where};
 pub use surface::SurfaceDistances;
 
 /// The default NSD tolerance: 1.0 physical unit.
@@ -215,6 +215,29 @@ pub fn evaluate_all(
         .collect())
 }
 
+/// Metrics of the union of all labels: every non-zero voxel is foreground in
+/// both volumes (cell + nucleus + nucleoli as one object). This is the
+/// "over all labels" aggregate of `interslice evaluate`.
+pub fn evaluate_foreground(
+    gt: &LabelVolume,
+    seg: &LabelVolume,
+    tolerance: f64,
+) -> Result<Metrics, CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    check_tolerance(tolerance)?;
+    let c = confusion_where(gt.data(), seg.data(), |x| x != 0);
+    let dims = gt.geometry().dims;
+    let g = NonZero {
+        data: gt.data(),
+        dims,
+    };
+    let s = NonZero {
+        data: seg.data(),
+        dims,
+    };
+    Ok(evaluate_mask_views(gt.geometry(), &g, &s, c, tolerance))
+}
+
 /// Only the confusion matrix of `label` (Dice, Jaccard, ... via its methods):
 /// one pass over both volumes, for callers that evaluate many segmentations.
 pub fn overlap_only(
@@ -251,16 +274,27 @@ fn evaluate_views<T: Copy + PartialEq + Sync>(
         dims,
         value,
     };
+    evaluate_mask_views(geometry, &g, &s, c, tolerance)
+}
+
+/// The metrics of two mask views whose confusion matrix `c` is known.
+fn evaluate_mask_views<G: MaskView, S: MaskView>(
+    geometry: &Geometry,
+    g: &G,
+    s: &S,
+    c: Confusion,
+    tolerance: f64,
+) -> Metrics {
     let bb = match (c.gt_voxels() > 0, c.seg_voxels() > 0) {
         (false, false) => None,
-        (true, false) => border::bounding_box(&g),
-        (false, true) => border::bounding_box(&s),
+        (true, false) => border::bounding_box(g),
+        (false, true) => border::bounding_box(s),
         (true, true) => {
-            let (a, b) = rayon::join(|| border::bounding_box(&g), || border::bounding_box(&s));
+            let (a, b) = rayon::join(|| border::bounding_box(g), || border::bounding_box(s));
             a.zip(b).map(|(a, b)| a.union(b))
         }
     };
-    let sd = surface::surface_distances(&g, &s, bb, geometry.spacing, tolerance);
+    let sd = surface::surface_distances(g, s, bb, geometry.spacing, tolerance);
     Metrics::new(c, sd, geometry, tolerance)
 }
 

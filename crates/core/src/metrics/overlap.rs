@@ -93,6 +93,19 @@ impl Confusion {
 /// # Panics
 /// If the slices differ in length (callers check the geometry first).
 pub fn confusion_of<T: Copy + PartialEq + Sync>(gt: &[T], seg: &[T], fg: T) -> Confusion {
+    confusion_where(gt, seg, |x| x == fg)
+}
+
+/// Count the confusion matrix of the voxels for which `is_fg` holds, in one
+/// parallel pass over both arrays.
+///
+/// # Panics
+/// If the slices differ in length (callers check the geometry first).
+pub fn confusion_where<T: Copy + Sync>(
+    gt: &[T],
+    seg: &[T],
+    is_fg: impl Fn(T) -> bool + Sync,
+) -> Confusion {
     assert_eq!(
         gt.len(),
         seg.len(),
@@ -105,8 +118,8 @@ pub fn confusion_of<T: Copy + PartialEq + Sync>(gt: &[T], seg: &[T], fg: T) -> C
             // u32 accumulators over at most CHUNK voxels vectorise well.
             let (mut ng, mut ns, mut both) = (0u32, 0u32, 0u32);
             for (&x, &y) in a.iter().zip(b) {
-                let p = u32::from(x == fg);
-                let q = u32::from(y == fg);
+                let p = u32::from(is_fg(x));
+                let q = u32::from(is_fg(y));
                 ng += p;
                 ns += q;
                 both += p & q;

@@ -225,3 +225,31 @@ fn single_voxel_offset_by_one_anisotropic_slice() {
     assert_eq!(m.volume_gt, 3.0);
     assert_eq!(m.dice, Some(0.0));
 }
+
+proptest! {
+    #[test]
+    fn foreground_is_the_union_of_all_labels(
+        (d, s, g, p) in masks(),
+        lg in proptest::collection::vec(0u16..4, 343),
+        lp in proptest::collection::vec(0u16..4, 343),
+    ) {
+        let geo = Geometry::new(d, s, LengthUnit::Micrometre).unwrap();
+        let n = g.len();
+        // Labels 1..=3 where the mask is set, 0 elsewhere.
+        let label = |m: &[bool], l: &[u16]| -> LabelVolume {
+            Volume::from_vec(
+                geo.clone(),
+                m.iter().zip(l).map(|(&x, &v)| if x { v.max(1) } else { 0 }).collect(),
+            )
+            .unwrap()
+        };
+        let gl = label(&g, &lg[..n]);
+        let pl = label(&p, &lp[..n]);
+        let gm = Volume::from_vec(geo.clone(), g.clone()).unwrap();
+        let pm = Volume::from_vec(geo.clone(), p.clone()).unwrap();
+        prop_assert_eq!(
+            evaluate_foreground(&gl, &pl, 1.0).unwrap(),
+            evaluate_masks(&gm, &pm, 1.0).unwrap()
+        );
+    }
+}

@@ -61,7 +61,7 @@ pub struct PhantomParams {
 impl Default for PhantomParams {
     fn default() -> Self {
         PhantomParams {
-            size: 160,
+            size: 128,
             seed: 1,
             bits: 8,
             noise: 0.02,
@@ -92,6 +92,19 @@ impl PhantomParams {
         }
         Ok(())
     }
+}
+
+/// The seed of cell `index` (1-based) of a series drawn with `seed`: a
+/// SplitMix64 mix of both, so series of neighbouring seeds share no cell
+/// (with `seed + index` the second cell of seed 1 would be the first of seed 2).
+pub fn cell_seed(seed: u64, index: u64) -> u64 {
+    let mut z = seed
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(index)
+        .wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// One structure of a phantom with its size.
@@ -136,7 +149,10 @@ impl Texture {
             .map(|_| {
                 let d = unit_vector(rng);
                 let k = std::f64::consts::TAU / rng.gen_range(wavelength.0..wavelength.1);
-                ([d[0] * k, d[1] * k, d[2] * k], rng.gen_range(0.0..std::f64::consts::TAU))
+                (
+                    [d[0] * k, d[1] * k, d[2] * k],
+                    rng.gen_range(0.0..std::f64::consts::TAU),
+                )
             })
             .collect();
         Texture {
@@ -208,6 +224,68 @@ fn fits(inner: &StarShape, outer: &StarShape, margin: f64, dirs: &[[f64; 3]]) ->
     })
 }
 
+/// Smallest nucleolus radius in voxels (0.7 µm). Large enough that the blur
+/// leaves its core at the nucleolus level, and that it always holds voxel
+/// centres (a ball of radius >= 0.87 does), so no nucleolus label is empty.
+const MIN_NUCLEOLUS_RADIUS: f64 = 2.0;
+
+/// Draw 1..=3 nucleoli inside the nucleus, disjoint and at least one voxel
+/// apart. The count is drawn first; the first nucleolus is always placed
+/// (falling back to a small one at the nucleus centre, which is always inside),
+/// a further one that finds no room after many attempts is left out, so small
+/// volumes get fewer nucleoli instead of an error.
+fn place_nucleoli(rng: &mut ChaCha8Rng, nucleus: &StarShape) -> Vec<StarShape> {
+    let count = rng.gen_range(1..=3);
+    let dirs = sphere_directions(120);
+    let mut nucleoli: Vec<StarShape> = Vec::with_capacity(count);
+    for _ in 0..count {
+        let mut placed = None;
+        for attempt in 0..600 {
+            let shrink = 0.99f64.powi((attempt - 100).max(0));
+            let radius =
+                (nucleus.radius * rng.gen_range(0.13..0.21) * shrink).max(MIN_NUCLEOLUS_RADIUS);
+            let offset = unit_vector(rng);
+            let dist = rng.gen_range(0.0..0.6) * nucleus.radius;
+            let candidate = StarShape {
+                centre: add(nucleus.centre, offset, dist),
+                radius,
+                harmonics: vec![harmonic(rng, 2, 0.05, 0.15)],
+                dents: vec![],
+            };
+            let apart = nucleoli.iter().all(|o| {
+                let d: f64 = (0..3)
+                    .map(|a| (o.centre[a] - candidate.centre[a]).powi(2))
+                    .sum();
+                d.sqrt() > o.max_radius() + candidate.max_radius() + 1.0
+            });
+            if apart && fits(&candidate, nucleus, 0.75, &dirs) {
+                placed = Some(candidate);
+                break;
+            }
+        }
+        match placed {
+            Some(p) => nucleoli.push(p),
+            None if nucleoli.is_empty() => {
+                // The centre of a star shape is inside it; shrink until it fits.
+                let mut radius = (0.15 * nucleus.radius).max(MIN_NUCLEOLUS_RADIUS);
+                let mut c = StarShape {
+                    centre: nucleus.centre,
+                    radius,
+                    harmonics: vec![],
+                    dents: vec![],
+                };
+                while radius > MIN_NUCLEOLUS_RADIUS && !fits(&c, nucleus, 0.75, &dirs) {
+                    radius = (radius * 0.9).max(MIN_NUCLEOLUS_RADIUS);
+                    c.radius = radius;
+                }
+                nucleoli.push(c);
+            }
+            None => break,
+        }
+    }
+    nucleoli
+}
+
 /// Draw the model of a phantom (no rendering). Deterministic for the parameters.
 pub fn model(params: &PhantomParams) -> Result<Model, CoreError> {
     params.validate()?;
@@ -236,31 +314,44 @@ pub fn model(params: &PhantomParams) -> Result<Model, CoreError> {
         }],
     };
 
-    // Nucleus: about half the cell's radius, strongly lobed (degree 3-4) and
-    // indented by one or two deep dents; redrawn (and shrunk after a while)
-    // until it fits in the cell with a margin.
+    // Nucleus: about half the cell's radius, lobed (harmonics of degree 3-4)
+    // and indented. A dent makes the surface concave only when it is deep for
+    // its width: a Gaussian dip of width w flattens a sphere by about 2w at its
+    // rim, so depth 0.37 with width 0.2 merely flattens it (the rim lies on the
+    // plane through the bottom of the dip); depth >= 0.45 with width <= 0.15
+    // gives a true indentation. Redrawn (and shrunk after a while) until it
+    // fits in the cell with a margin.
     let margin = 1.5 + 0.03 * cell.radius;
     let mut nucleus = None;
     for attempt in 0..400 {
         let shrink = 0.97f64.powi((attempt - 20).max(0));
         let offset = unit_vector(&mut rng);
         let dist = rng.gen_range(0.0..0.1) * cell.radius;
-        let dent_count = rng.gen_range(1..=2);
+        let radius = 0.55 * cell.radius * rng.gen_range(0.92..1.05) * shrink;
+        let harmonics = vec![
+            harmonic(&mut rng, 2, 0.04, 0.1),
+            harmonic(&mut rng, 3, 0.05, 0.1),
+            harmonic(&mut rng, 4, 0.05, 0.1),
+        ];
+        // One broad, deep indentation (a kidney-shaped nucleus), sometimes a
+        // second, narrower one.
+        let mut dents = vec![Dent {
+            axis: unit_vector(&mut rng),
+            depth: rng.gen_range(0.45..0.6),
+            width: rng.gen_range(0.08..0.15),
+        }];
+        if rng.gen_bool(0.5) {
+            dents.push(Dent {
+                axis: unit_vector(&mut rng),
+                depth: rng.gen_range(0.2..0.35),
+                width: rng.gen_range(0.04..0.08),
+            });
+        }
         let candidate = StarShape {
             centre: add(cell.centre, offset, dist),
-            radius: 0.5 * cell.radius * rng.gen_range(0.9..1.05) * shrink,
-            harmonics: vec![
-                harmonic(&mut rng, 2, 0.04, 0.1),
-                harmonic(&mut rng, 3, 0.06, 0.11),
-                harmonic(&mut rng, 4, 0.06, 0.11),
-            ],
-            dents: (0..dent_count)
-                .map(|_| Dent {
-                    axis: unit_vector(&mut rng),
-                    depth: rng.gen_range(0.22..0.38),
-                    width: rng.gen_range(0.1..0.2),
-                })
-                .collect(),
+            radius,
+            harmonics,
+            dents,
         };
         if fits(&candidate, &cell, margin, &dirs) {
             nucleus = Some(candidate);
@@ -270,36 +361,7 @@ pub fn model(params: &PhantomParams) -> Result<Model, CoreError> {
     let nucleus =
         nucleus.ok_or_else(|| CoreError::Invalid("phantom: could not fit the nucleus".into()))?;
 
-    // Nucleoli: 1..=3 small blobs well inside the nucleus, disjoint.
-    let count = rng.gen_range(1..=3);
-    let mut nucleoli: Vec<StarShape> = Vec::with_capacity(count);
-    let dirs_small = sphere_directions(120);
-    for _ in 0..count {
-        let mut placed = None;
-        for attempt in 0..1000 {
-            let shrink = 0.99f64.powi((attempt - 100).max(0));
-            let radius = (nucleus.radius * rng.gen_range(0.11..0.18) * shrink).max(1.6);
-            let offset = unit_vector(&mut rng);
-            let dist = rng.gen_range(0.0..0.55) * nucleus.radius;
-            let candidate = StarShape {
-                centre: add(nucleus.centre, offset, dist),
-                radius,
-                harmonics: vec![harmonic(&mut rng, 2, 0.05, 0.15)],
-                dents: vec![],
-            };
-            let apart = nucleoli.iter().all(|o| {
-                let d: f64 = (0..3).map(|a| (o.centre[a] - candidate.centre[a]).powi(2)).sum();
-                d.sqrt() > o.max_radius() + candidate.max_radius() + 1.5
-            });
-            if apart && fits(&candidate, &nucleus, 1.0, &dirs_small) {
-                placed = Some(candidate);
-                break;
-            }
-        }
-        nucleoli.push(
-            placed.ok_or_else(|| CoreError::Invalid("phantom: could not fit a nucleolus".into()))?,
-        );
-    }
+    let nucleoli = place_nucleoli(&mut rng, &nucleus);
 
     let cytoplasm_texture = Texture::new(&mut rng, 8, (8.0, 20.0));
     let chromatin_texture = Texture::new(&mut rng, 12, (2.5, 6.0));

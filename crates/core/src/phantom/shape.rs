@@ -80,14 +80,24 @@ impl StarShape {
 
     /// An upper bound of the radius in every direction.
     pub fn max_radius(&self) -> f64 {
-        self.radius * (1.0 + self.harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>())
+        self.radius
+            * (1.0
+                + self
+                    .harmonics
+                    .iter()
+                    .map(|h| h.amplitude.abs())
+                    .sum::<f64>())
     }
 
     /// Signed radial depth of `p` below the surface, in voxels: positive inside,
     /// `radius_at(d) - |p - centre|` (the centre has the full radius).
     #[inline]
     pub fn depth(&self, p: [f64; 3]) -> f64 {
-        let v = [p[0] - self.centre[0], p[1] - self.centre[1], p[2] - self.centre[2]];
+        let v = [
+            p[0] - self.centre[0],
+            p[1] - self.centre[1],
+            p[2] - self.centre[2],
+        ];
         let r2 = dot(v, v);
         if r2 == 0.0 {
             return self.radius_at([0.0, 0.0, 1.0]);
@@ -99,7 +109,11 @@ impl StarShape {
     /// True when `p` is inside (on the surface counts as inside).
     #[inline]
     pub fn contains(&self, p: [f64; 3]) -> bool {
-        let v = [p[0] - self.centre[0], p[1] - self.centre[1], p[2] - self.centre[2]];
+        let v = [
+            p[0] - self.centre[0],
+            p[1] - self.centre[1],
+            p[2] - self.centre[2],
+        ];
         let r2 = dot(v, v);
         let m = self.max_radius();
         if r2 > m * m {
@@ -111,7 +125,11 @@ impl StarShape {
     /// The surface point in unit direction `d`.
     pub fn surface_point(&self, d: [f64; 3]) -> [f64; 3] {
         let r = self.radius_at(d);
-        [self.centre[0] + r * d[0], self.centre[1] + r * d[1], self.centre[2] + r * d[2]]
+        [
+            self.centre[0] + r * d[0],
+            self.centre[1] + r * d[1],
+            self.centre[2] + r * d[2],
+        ]
     }
 
     /// Voxel index bounds `[lo, hi)` per axis of the shape's bounding box, clipped to `dims`.
@@ -157,11 +175,20 @@ mod tests {
 
     #[test]
     fn sphere_and_dent() {
-        let mut s = StarShape { centre: [5.0; 3], radius: 3.0, harmonics: vec![], dents: vec![] };
+        let mut s = StarShape {
+            centre: [5.0; 3],
+            radius: 3.0,
+            harmonics: vec![],
+            dents: vec![],
+        };
         assert!(s.contains([7.9, 5.0, 5.0]));
         assert!(!s.contains([8.1, 5.0, 5.0]));
         assert!(s.contains([5.0; 3]));
-        s.dents.push(Dent { axis: [1.0, 0.0, 0.0], depth: 0.5, width: 0.1 });
+        s.dents.push(Dent {
+            axis: [1.0, 0.0, 0.0],
+            depth: 0.5,
+            width: 0.1,
+        });
         assert!((s.radius_at([1.0, 0.0, 0.0]) - 1.5).abs() < 1e-12);
         assert!(!s.contains([7.0, 5.0, 5.0]));
         assert!(s.contains([3.0, 5.0, 5.0]));

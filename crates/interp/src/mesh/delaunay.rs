@@ -24,10 +24,11 @@
 //! are dropped, and they leave holes and notches: the original study found
 //! that Delaunay left holes, which this reproduces. Points are resampled so
 //! that at most [`MAX_POINTS`] are tetrahedralised.
-use super::{Frame, contour_points, finish, mean_gap};
+use super::{Frame, finish, mean_gap, slice_contours};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::mesh::TriMesh;
+use rayon::prelude::*;
 use robust::{Coord3D, insphere, orient3d};
 use std::collections::HashMap;
 
@@ -57,7 +58,11 @@ pub struct Tetrahedralization {
 
 #[inline]
 fn c3(p: [f64; 3]) -> Coord3D<f64> {
-    Coord3D { x: p[0], y: p[1], z: p[2] }
+    Coord3D {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
 }
 
 /// Faces of a positively oriented tetrahedron, opposite vertex i, wound so
@@ -80,7 +85,11 @@ impl Tetrahedralization {
             lo = [0.0; 3];
             hi = [1.0; 3];
         }
-        let c = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0];
+        let c = [
+            (lo[0] + hi[0]) / 2.0,
+            (lo[1] + hi[1]) / 2.0,
+            (lo[2] + hi[2]) / 2.0,
+        ];
         let r = (0..3).map(|d| hi[d] - lo[d]).fold(1.0f64, f64::max) * 50.0;
         pts.push([c[0] - r, c[1] - r, c[2] - r]);
         pts.push([c[0] + 3.0 * r, c[1] - r, c[2] - r]);
@@ -88,12 +97,22 @@ impl Tetrahedralization {
         pts.push([c[0] - r, c[1] - r, c[2] + 3.0 * r]);
         let s = n as u32;
         let mut v = [s, s + 1, s + 2, s + 3];
-        if orient3d(c3(pts[v[0] as usize]), c3(pts[v[1] as usize]), c3(pts[v[2] as usize]), c3(pts[v[3] as usize])) < 0.0 {
+        if orient3d(
+            c3(pts[v[0] as usize]),
+            c3(pts[v[1] as usize]),
+            c3(pts[v[2] as usize]),
+            c3(pts[v[3] as usize]),
+        ) < 0.0
+        {
             v.swap(0, 1);
         }
         let mut t = Tetrahedralization {
             points: pts,
-            tets: vec![Tet { v, n: [NONE; 4], alive: true }],
+            tets: vec![Tet {
+                v,
+                n: [NONE; 4],
+                alive: true,
+            }],
             free: Vec::new(),
             n_input: n,
             last: 0,
@@ -106,7 +125,12 @@ impl Tetrahedralization {
 
     fn orient(&self, a: u32, b: u32, c: u32, d: u32) -> f64 {
         let p = &self.points;
-        orient3d(c3(p[a as usize]), c3(p[b as usize]), c3(p[c as usize]), c3(p[d as usize]))
+        orient3d(
+            c3(p[a as usize]),
+            c3(p[b as usize]),
+            c3(p[c as usize]),
+            c3(p[d as usize]),
+        )
     }
 
     /// The tetrahedron containing point `p` (visibility walk).
@@ -162,7 +186,11 @@ impl Tetrahedralization {
         let t0 = self.locate(p);
         // Skip a point equal to a vertex of its tetrahedron.
         let pp = self.points[p as usize];
-        if self.tets[t0 as usize].v.iter().any(|&v| self.points[v as usize] == pp) {
+        if self.tets[t0 as usize]
+            .v
+            .iter()
+            .any(|&v| self.points[v as usize] == pp)
+        {
             return;
         }
         let mut cavity = vec![t0];
@@ -215,7 +243,8 @@ impl Tetrahedralization {
                     if j == f {
                         continue;
                     }
-                    let others: Vec<u32> = (0..4).filter(|&m| m != f && m != j).map(|m| v[m]).collect();
+                    let others: Vec<u32> =
+                        (0..4).filter(|&m| m != f && m != j).map(|m| v[m]).collect();
                     let key = (others[0].min(others[1]), others[0].max(others[1]));
                     if let Some((other, oj)) = edge_map.remove(&key) {
                         self.tets[id as usize].n[j] = other;
@@ -242,7 +271,11 @@ impl Tetrahedralization {
     /// index quadruples with positive orientation.
     pub fn tetrahedra(&self) -> Vec<[u32; 4]> {
         let n = self.n_input as u32;
-        self.tets.iter().filter(|t| t.alive && t.v.iter().all(|&v| v < n)).map(|t| t.v).collect()
+        self.tets
+            .iter()
+            .filter(|t| t.alive && t.v.iter().all(|&v| v < n))
+            .map(|t| t.v)
+            .collect()
     }
 
     /// Circumradius of a tetrahedron of input points.
@@ -251,7 +284,13 @@ impl Tetrahedralization {
         let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
         let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
         let c = [p[3][0] - p[0][0], p[3][1] - p[0][1], p[3][2] - p[0][2]];
-        let cross = |x: [f64; 3], y: [f64; 3]| [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]];
+        let cross = |x: [f64; 3], y: [f64; 3]| {
+            [
+                x[1] * y[2] - x[2] * y[1],
+                x[2] * y[0] - x[0] * y[2],
+                x[0] * y[1] - x[1] * y[0],
+            ]
+        };
         let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
         let (bc, ca, ab) = (cross(b, c), cross(c, a), cross(a, b));
         let det = 2.0 * dot(a, bc);
@@ -270,13 +309,27 @@ impl Tetrahedralization {
     /// The boundary of the union of live input tetrahedra with circumradius
     /// at most `alpha`, wound outwards (vertices are the input points).
     pub fn alpha_surface(&self, alpha: f64) -> TriMesh {
+        self.alpha_surface_where(alpha, |_| true)
+    }
+
+    /// As [`Tetrahedralization::alpha_surface`], keeping only the tetrahedra
+    /// (vertex index quadruples) for which `accept` also holds.
+    pub fn alpha_surface_where(&self, alpha: f64, accept: impl Fn([u32; 4]) -> bool) -> TriMesh {
         let n = self.n_input as u32;
         let keep: Vec<bool> = self
             .tets
             .iter()
-            .map(|t| t.alive && t.v.iter().all(|&v| v < n) && self.circumradius(t.v) <= alpha)
+            .map(|t| {
+                t.alive
+                    && t.v.iter().all(|&v| v < n)
+                    && self.circumradius(t.v) <= alpha
+                    && accept(t.v)
+            })
             .collect();
-        let mut mesh = TriMesh { vertices: self.points[..self.n_input].to_vec(), triangles: Vec::new() };
+        let mut mesh = TriMesh {
+            vertices: self.points[..self.n_input].to_vec(),
+            triangles: Vec::new(),
+        };
         for (i, t) in self.tets.iter().enumerate() {
             if !keep[i] {
                 continue;
@@ -295,7 +348,8 @@ impl Tetrahedralization {
 
 /// A tiny deterministic offset in `[-1, 1]` per point and coordinate.
 fn jitter(i: usize, d: usize) -> f64 {
-    let mut x = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (d as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+    let mut x = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (d as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
     x ^= x >> 31;
     x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
     x ^= x >> 29;
@@ -307,11 +361,16 @@ pub fn surface(input: &SparseMask<'_>) -> TriMesh {
     let frame = Frame::of(input);
     let pixel = frame.spacing[0].min(frame.spacing[1]);
     let mut step = pixel;
-    let mut points = contour_points(input, &frame, step);
-    if points.len() > MAX_POINTS {
-        step *= points.len() as f64 / MAX_POINTS as f64 * 1.05;
-        points = contour_points(input, &frame, step);
+    let mut objects = ObjectPoints::of(input, &frame, step);
+    if objects.points.len() > MAX_POINTS {
+        step *= objects.points.len() as f64 / MAX_POINTS as f64 * 1.05;
+        objects = ObjectPoints::of(input, &frame, step);
     }
+    let ObjectPoints {
+        mut points,
+        object,
+        r_eq,
+    } = objects;
     if points.len() < 4 {
         return TriMesh::new();
     }
@@ -322,29 +381,153 @@ pub fn surface(input: &SparseMask<'_>) -> TriMesh {
         }
     }
     let tri = Tetrahedralization::new(&points);
-    let alpha = choose_alpha(input, &frame);
-    let mut mesh = tri.alpha_surface(alpha);
+    let alpha = mean_gap(input, &frame).max(r_eq);
+    let mut mesh = tri.alpha_surface_where(alpha, |v| {
+        let o = object[v[0] as usize];
+        v.iter().all(|&i| object[i as usize] == o)
+    });
     // Keep only the vertices that are used (the mesh is written out as is).
     compact(&mut mesh);
     frame.to_xyz(mesh)
 }
 
-/// `max(gap, r_eq)` (see the module docs).
-fn choose_alpha(input: &SparseMask<'_>, frame: &Frame) -> f64 {
-    let pixel_area = frame.spacing[0] * frame.spacing[1];
-    let mut areas: Vec<f64> = input
-        .drawn
-        .iter()
-        .map(|&d| {
-            let s = input.mask.slice(input.axis, d).expect("validated drawn index");
-            s.iter().filter(|&&v| v).count() as f64 * pixel_area
-        })
-        .filter(|&a| a > 0.0)
-        .collect();
-    areas.sort_by(f64::total_cmp);
-    let median = areas.get(areas.len() / 2).copied().unwrap_or(0.0);
-    let r_eq = (median / std::f64::consts::PI).sqrt();
-    mean_gap(input, frame).max(r_eq)
+/// Contour points with the object each belongs to, and the alpha scale.
+///
+/// Objects: the 4-connected regions of each drawn slice, chained across
+/// consecutive drawn slices wherever two regions overlap (union-find), so
+/// the lobes of one nucleus that merge on some slice form one object, and
+/// two nucleoli whose tracings never overlap stay two.
+struct ObjectPoints {
+    points: Vec<[f64; 3]>,
+    /// Object id of every point.
+    object: Vec<u32>,
+    /// Radius of the disc with the area of the median region (physical).
+    r_eq: f64,
+}
+
+impl ObjectPoints {
+    fn of(input: &SparseMask<'_>, frame: &Frame, step: f64) -> ObjectPoints {
+        let (w, h) = (frame.dims[0], frame.dims[1]);
+        let per_slice: Vec<SliceRegions> = input
+            .drawn
+            .par_iter()
+            .map(|&d| {
+                let buf = input
+                    .mask
+                    .slice(input.axis, d)
+                    .expect("validated drawn index");
+                let (labels, sizes) = regions_4(&buf, w, h);
+                let contours = slice_contours(&buf, d, frame, step)
+                    .into_iter()
+                    .map(|(px, pts)| (labels[px[0] + w * px[1]].max(1) - 1, pts))
+                    .collect();
+                SliceRegions {
+                    labels,
+                    sizes,
+                    contours,
+                }
+            })
+            .collect();
+        let mut offset = Vec::with_capacity(per_slice.len());
+        let mut total = 0u32;
+        for s in &per_slice {
+            offset.push(total);
+            total += s.sizes.len() as u32;
+        }
+        let mut parent: Vec<u32> = (0..total).collect();
+        for i in 1..per_slice.len() {
+            let (a, b) = (&per_slice[i - 1], &per_slice[i]);
+            if a.sizes.is_empty() || b.sizes.is_empty() {
+                continue;
+            }
+            for (&la, &lb) in a.labels.iter().zip(&b.labels) {
+                if la > 0 && lb > 0 {
+                    let ra = find(&mut parent, offset[i - 1] + la - 1);
+                    let rb = find(&mut parent, offset[i] + lb - 1);
+                    if ra != rb {
+                        parent[ra as usize] = rb;
+                    }
+                }
+            }
+        }
+        let mut areas: Vec<usize> = per_slice
+            .iter()
+            .flat_map(|s| s.sizes.iter().copied())
+            .collect();
+        areas.sort_unstable();
+        let median = areas.get(areas.len() / 2).copied().unwrap_or(0) as f64;
+        let r_eq = (median * frame.spacing[0] * frame.spacing[1] / std::f64::consts::PI).sqrt();
+        let mut points = Vec::new();
+        let mut object = Vec::new();
+        for (i, s) in per_slice.into_iter().enumerate() {
+            for (comp, pts) in s.contours {
+                let o = find(&mut parent, offset[i] + comp);
+                object.extend(std::iter::repeat_n(o, pts.len()));
+                points.extend(pts);
+            }
+        }
+        ObjectPoints {
+            points,
+            object,
+            r_eq,
+        }
+    }
+}
+
+/// The regions of one drawn slice: labels (0 background, else region + 1),
+/// region sizes in pixels and the contours with their region.
+struct SliceRegions {
+    labels: Vec<u32>,
+    sizes: Vec<usize>,
+    contours: Vec<(u32, Vec<[f64; 3]>)>,
+}
+
+/// 4-connected regions of a `w x h` mask: labels (0 = background, region
+/// `r` labelled `r + 1`) and region sizes.
+fn regions_4(mask: &[bool], w: usize, h: usize) -> (Vec<u32>, Vec<usize>) {
+    let mut labels = vec![0u32; mask.len()];
+    let mut sizes = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..mask.len() {
+        if !mask[start] || labels[start] != 0 {
+            continue;
+        }
+        sizes.push(0usize);
+        let l = sizes.len() as u32;
+        labels[start] = l;
+        stack.push(start);
+        while let Some(p) = stack.pop() {
+            sizes[l as usize - 1] += 1;
+            let (u, v) = (p % w, p / w);
+            let mut visit = |q: usize| {
+                if mask[q] && labels[q] == 0 {
+                    labels[q] = l;
+                    stack.push(q);
+                }
+            };
+            if u > 0 {
+                visit(p - 1);
+            }
+            if u + 1 < w {
+                visit(p + 1);
+            }
+            if v > 0 {
+                visit(p - w);
+            }
+            if v + 1 < h {
+                visit(p + w);
+            }
+        }
+    }
+    (labels, sizes)
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
 }
 
 /// Drop unused vertices and renumber.
@@ -393,14 +576,19 @@ mod tests {
                     continue;
                 }
                 let q = v.map(|k| c3(t.points[k as usize]));
-                assert!(insphere(q[0], q[1], q[2], q[3], c3(*p)) <= 0.0, "point {i} inside the circumsphere of {v:?}");
+                assert!(
+                    insphere(q[0], q[1], q[2], q[3], c3(*p)) <= 0.0,
+                    "point {i} inside the circumsphere of {v:?}"
+                );
             }
         }
     }
 
     #[test]
     fn random_points_give_a_delaunay_tetrahedralisation_filling_the_hull() {
-        let pts: Vec<[f64; 3]> = (0..200).map(|i| [jitter(i, 0) * 5.0, jitter(i, 1) * 3.0, jitter(i, 2) * 4.0]).collect();
+        let pts: Vec<[f64; 3]> = (0..200)
+            .map(|i| [jitter(i, 0) * 5.0, jitter(i, 1) * 3.0, jitter(i, 2) * 4.0])
+            .collect();
         let t = Tetrahedralization::new(&pts);
         empty_circumsphere_property(&t, &pts);
         // The convex hull surface (alpha = infinity) is closed and encloses
@@ -412,7 +600,11 @@ mod tests {
             .iter()
             .map(|v| t.orient(v[0], v[1], v[2], v[3]) / 6.0)
             .sum();
-        assert!((hull.signed_volume() - vol).abs() < 1e-9 * vol.max(1.0), "{} vs {vol}", hull.signed_volume());
+        assert!(
+            (hull.signed_volume() - vol).abs() < 1e-9 * vol.max(1.0),
+            "{} vs {vol}",
+            hull.signed_volume()
+        );
     }
 
     #[test]
@@ -422,13 +614,21 @@ mod tests {
             for j in 0..5 {
                 for k in 0..3 {
                     let n = pts.len();
-                    pts.push([i as f64 + 1e-6 * jitter(n, 0), j as f64 + 1e-6 * jitter(n, 1), 2.0 * k as f64 + 1e-6 * jitter(n, 2)]);
+                    pts.push([
+                        i as f64 + 1e-6 * jitter(n, 0),
+                        j as f64 + 1e-6 * jitter(n, 1),
+                        2.0 * k as f64 + 1e-6 * jitter(n, 2),
+                    ]);
                 }
             }
         }
         let t = Tetrahedralization::new(&pts);
         empty_circumsphere_property(&t, &pts);
-        let vol: f64 = t.tetrahedra().iter().map(|v| t.orient(v[0], v[1], v[2], v[3]) / 6.0).sum();
+        let vol: f64 = t
+            .tetrahedra()
+            .iter()
+            .map(|v| t.orient(v[0], v[1], v[2], v[3]) / 6.0)
+            .sum();
         assert!((vol - 4.0 * 4.0 * 4.0).abs() < 1e-3, "hull volume {vol}");
     }
 }

@@ -84,7 +84,9 @@ pub fn smallest_eigenvector(m: [[f64; 3]; 3]) -> [f64; 3] {
             }
         }
     }
-    let i = (0..3).min_by(|&x, &y| a[x][x].total_cmp(&a[y][y])).unwrap_or(0);
+    let i = (0..3)
+        .min_by(|&x, &y| a[x][x].total_cmp(&a[y][y]))
+        .unwrap_or(0);
     [v[0][i], v[1][i], v[2][i]]
 }
 
@@ -146,7 +148,9 @@ impl UnorganizedPoints {
                 }
             }
         }
-        edges.par_sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+        edges.par_sort_unstable_by(|x, y| {
+            x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2))
+        });
         edges.dedup_by(|x, y| x.1 == y.1 && x.2 == y.2);
         // Kruskal: the minimum spanning forest.
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -160,7 +164,8 @@ impl UnorganizedPoints {
             }
         }
         // One seed per component: the point of largest u, normal towards +u.
-        let mut seed_of_root: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+        let mut seed_of_root: std::collections::HashMap<u32, u32> =
+            std::collections::HashMap::new();
         for i in 0..n as u32 {
             let r = find(&mut parent, i);
             let e = seed_of_root.entry(r).or_insert(i);
@@ -206,18 +211,56 @@ impl UnorganizedPoints {
         let planes = self.tangent_planes(&points);
         let centres: Vec<[f64; 3]> = planes.iter().map(|p| p.0).collect();
         let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&centres);
+        // Hoppe's rho + delta: half the gap between drawn slices (the largest
+        // empty sphere centred on the surface), half a point spacing along
+        // the contours, and a pixel of noise.
         let reach = gap + 2.0 * step;
         let reach2 = reach * reach;
-        let fbox = FieldBox::around(&frame, lo, hi, step + pixel);
-        // Value = minus the signed distance: inside (negative distance) is > 0.
-        let values = fbox.evaluate(-1.0, |p| {
+        let fbox = FieldBox::around(&frame, lo, hi, reach);
+        let signed = |p: [f64; 3]| -> f32 {
             let i = tree.nearest_one::<SquaredEuclidean>(&p).item as usize;
             let (o, n) = planes[i];
             let e = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
             let s = dot(e, n);
             let along2 = dot(e, e) - s * s;
+            // Value = minus the signed distance: inside is > 0.
             if along2 > reach2 { -1.0 } else { -s as f32 }
+        };
+        // f is evaluated exactly (one k-d tree query per sample) within reach
+        // of the tangent-plane centres, plus the error of the seed distance
+        // and one sample, so that every edge the surface can cross near the
+        // data has exact values at both ends. Further out (the interior of a
+        // large object, the space around it, the end caps), where the nearest
+        // centre is far and every query expensive, f is evaluated once per
+        // 2×2×2 block of samples and shared by the block.
+        let (dist, e) = fbox.seed_distance(&centres);
+        let s_max = frame.spacing.iter().copied().fold(0.0, f64::max);
+        let near = reach + e + s_max;
+        let [nu, nv, nw] = fbox.size;
+        let (cu, cv, cw) = (nu.div_ceil(2), nv.div_ceil(2), nw.div_ceil(2));
+        let corner_limit = near - 2.0 * s_max;
+        let mut coarse = vec![0f32; cu * cv * cw];
+        coarse.par_chunks_mut(cu * cv).enumerate().for_each(|(c, plane)| {
+            for b in 0..cv {
+                for a in 0..cu {
+                    let (ia, ib, ic) = (2 * a, 2 * b, 2 * c);
+                    if f64::from(dist[ia + nu * (ib + nv * ic)]) > corner_limit {
+                        let q = [fbox.coords[0][ia], fbox.coords[1][ib], fbox.coords[2][ic]];
+                        plane[a + cu * b] = signed(q);
+                    }
+                }
+            }
         });
+        let values = fbox.evaluate_guided(
+            -1.0,
+            |i| {
+                (f64::from(dist[i]) > near).then(|| {
+                    let (a, b, c) = (i % nu, (i / nu) % nv, i / (nu * nv));
+                    coarse[a / 2 + cu * (b / 2 + cv * (c / 2))]
+                })
+            },
+            signed,
+        );
         frame.to_xyz(fbox.iso_surface(&values, 0.0))
     }
 }
@@ -247,9 +290,16 @@ mod tests {
         assert!((v[2].abs() - 1.0).abs() < 1e-9, "{v:?}");
         // A rotated diagonal matrix.
         let (c, s) = (0.6f64, 0.8f64);
-        let m = [[c * c * 1.0 + s * s * 5.0, c * s * (1.0 - 5.0), 0.0], [c * s * (1.0 - 5.0), s * s + c * c * 5.0, 0.0], [0.0, 0.0, 3.0]];
+        let m = [
+            [c * c * 1.0 + s * s * 5.0, c * s * (1.0 - 5.0), 0.0],
+            [c * s * (1.0 - 5.0), s * s + c * c * 5.0, 0.0],
+            [0.0, 0.0, 3.0],
+        ];
         let v = smallest_eigenvector(m);
-        assert!((v[0].abs() - c).abs() < 1e-9 && (v[1].abs() - s).abs() < 1e-9, "{v:?}");
+        assert!(
+            (v[0].abs() - c).abs() < 1e-9 && (v[1].abs() - s).abs() < 1e-9,
+            "{v:?}"
+        );
     }
 
     #[test]
@@ -257,8 +307,15 @@ mod tests {
         let mut pts = Vec::new();
         for a in 0..20 {
             for b in 1..20 {
-                let (t, p) = (a as f64 * std::f64::consts::TAU / 20.0, b as f64 * std::f64::consts::PI / 20.0);
-                pts.push([10.0 * p.sin() * t.cos(), 10.0 * p.sin() * t.sin(), 10.0 * p.cos()]);
+                let (t, p) = (
+                    a as f64 * std::f64::consts::TAU / 20.0,
+                    b as f64 * std::f64::consts::PI / 20.0,
+                );
+                pts.push([
+                    10.0 * p.sin() * t.cos(),
+                    10.0 * p.sin() * t.sin(),
+                    10.0 * p.cos(),
+                ]);
             }
         }
         let planes = UnorganizedPoints::default().tangent_planes(&pts);

@@ -58,7 +58,10 @@ const FACES: [[u8; 4]; 6] = [
 
 fn edge_of(a: u8, b: u8) -> u8 {
     let (a, b) = if a < b { (a, b) } else { (b, a) };
-    EDGES.iter().position(|&e| e == (a, b)).expect("adjacent corners") as u8
+    EDGES
+        .iter()
+        .position(|&e| e == (a, b))
+        .expect("adjacent corners") as u8
 }
 
 /// For each of the 256 corner configurations (bit `c` set = corner `c`
@@ -128,7 +131,9 @@ struct PlaneVerts {
 
 impl PlaneVerts {
     fn find(&self, key: u32) -> u32 {
-        self.keys.binary_search(&key).expect("crossed edge has a vertex") as u32
+        self.keys
+            .binary_search(&key)
+            .expect("crossed edge has a vertex") as u32
     }
 }
 
@@ -140,7 +145,11 @@ const EXTRA: u32 = 1 << 31;
 /// spread over the grid's z planes with rayon.
 pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -> TriMesh {
     let (nx, ny, nz) = (grid.xs.len(), grid.ys.len(), grid.zs.len());
-    assert_eq!(grid.values.len(), nx * ny * nz, "grid values must match the coordinates");
+    assert_eq!(
+        grid.values.len(),
+        nx * ny * nz,
+        "grid values must match the coordinates"
+    );
     if nx < 2 || ny < 2 || nz < 2 {
         return TriMesh::new();
     }
@@ -155,7 +164,10 @@ pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -
     let planes: Vec<PlaneVerts> = (0..nz)
         .into_par_iter()
         .map(|k| {
-            let mut pv = PlaneVerts { keys: Vec::new(), pos: Vec::new() };
+            let mut pv = PlaneVerts {
+                keys: Vec::new(),
+                pos: Vec::new(),
+            };
             let z = grid.zs[k];
             for j in 0..ny {
                 let y = grid.ys[j];
@@ -208,7 +220,11 @@ pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -
                 for i in 0..nx - 1 {
                     let mut case = 0u8;
                     for c in 0..8u8 {
-                        let (di, dj, dk) = ((c & 1) as usize, (c >> 1 & 1) as usize, (c >> 2 & 1) as usize);
+                        let (di, dj, dk) = (
+                            (c & 1) as usize,
+                            (c >> 1 & 1) as usize,
+                            (c >> 2 & 1) as usize,
+                        );
                         if at(i + di, j + dj, k + dk) > iso {
                             case |= 1 << c;
                         }
@@ -219,14 +235,22 @@ pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -
                     // Global vertex index of cube edge e.
                     let vert = |e: u8| -> u32 {
                         let (a, b) = EDGES[e as usize];
-                        let (ci, cj, ck) = ((a & 1) as usize, (a >> 1 & 1) as usize, (a >> 2 & 1) as usize);
+                        let (ci, cj, ck) = (
+                            (a & 1) as usize,
+                            (a >> 1 & 1) as usize,
+                            (a >> 2 & 1) as usize,
+                        );
                         let dir = match a ^ b {
                             1 => 0,
                             2 => 1,
                             _ => 2,
                         };
                         let key = (3 * ((i + ci) + nx * (j + cj)) + dir) as u32;
-                        if ck == 0 { o0 + p0.find(key) } else { o1 + p1.find(key) }
+                        if ck == 0 {
+                            o0 + p0.find(key)
+                        } else {
+                            o1 + p1.find(key)
+                        }
                     };
                     for lp in &table[case as usize] {
                         let ids: Vec<u32> = lp.iter().map(|&e| vert(e)).collect();
@@ -262,14 +286,23 @@ pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -
         })
         .collect();
     let mut mesh = TriMesh::new();
-    mesh.vertices.reserve(total + layers.iter().map(|l| l.1.len()).sum::<usize>());
+    mesh.vertices
+        .reserve(total + layers.iter().map(|l| l.1.len()).sum::<usize>());
     for p in planes {
         mesh.vertices.extend(p.pos);
     }
     for (tris, extra) in layers {
         let base = mesh.vertices.len() as u32;
         mesh.vertices.extend(extra);
-        mesh.triangles.extend(tris.into_iter().map(|t| t.map(|g| if g & EXTRA != 0 { base + (g & !EXTRA) } else { g })));
+        mesh.triangles.extend(tris.into_iter().map(|t| {
+            t.map(|g| {
+                if g & EXTRA != 0 {
+                    base + (g & !EXTRA)
+                } else {
+                    g
+                }
+            })
+        }));
     }
     mesh
 }
@@ -305,7 +338,15 @@ mod tests {
         let mut values = vec![0f32; 27];
         values[13] = 1.0;
         let c = [0.0, 1.0, 2.0];
-        let m = marching_cubes(Grid { values: &values, xs: &c, ys: &c, zs: &c }, 0.5);
+        let m = marching_cubes(
+            Grid {
+                values: &values,
+                xs: &c,
+                ys: &c,
+                zs: &c,
+            },
+            0.5,
+        );
         assert_eq!(m.triangles.len(), 8);
         assert!(m.is_closed_and_oriented());
         // Octahedron with half-diagonals 0.5: volume 4/3 * 0.5^3.

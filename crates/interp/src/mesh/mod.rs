@@ -32,6 +32,7 @@ pub mod splat;
 pub mod voxelize;
 
 use crate::{InterpError, Interpolator, SparseMask};
+use interslice_core::edt::squared_edt_3d_f32;
 use interslice_core::mesh::TriMesh;
 use interslice_core::trace::mask_polygons;
 use interslice_core::{Axis, Mask};
@@ -43,7 +44,12 @@ pub use hoppe::UnorganizedPoints;
 pub use splat::GaussianSplat;
 
 /// The `--method` names of the mesh-based methods.
-pub const MESH_METHODS: [&str; 4] = ["marching-cubes", "gaussian-splat", "delaunay", "unorganized-points"];
+pub const MESH_METHODS: [&str; 4] = [
+    "marching-cubes",
+    "gaussian-splat",
+    "delaunay",
+    "unorganized-points",
+];
 
 /// The mesh-based interpolators, in the order of the original system.
 pub fn mesh_methods() -> Vec<Box<dyn Interpolator>> {
@@ -83,26 +89,39 @@ pub fn mask_surface(mask: &Mask) -> TriMesh {
     };
     let size = [hi[0] - lo[0] + 3, hi[1] - lo[1] + 3, hi[2] - lo[2] + 3];
     let coords = |d: usize| -> Vec<f64> {
-        (0..size[d]).map(|n| (lo[d] as f64 + n as f64 - 0.5) * g.spacing[d]).collect()
+        (0..size[d])
+            .map(|n| (lo[d] as f64 + n as f64 - 0.5) * g.spacing[d])
+            .collect()
     };
     let (xs, ys, zs) = (coords(0), coords(1), coords(2));
     let mut values = vec![0u8; size[0] * size[1] * size[2]];
     let data = mask.data();
-    values.par_chunks_mut(size[0] * size[1]).enumerate().for_each(|(kk, plane)| {
-        if kk == 0 || kk == size[2] - 1 {
-            return;
-        }
-        let k = lo[2] + kk - 1;
-        for jj in 1..size[1] - 1 {
-            let j = lo[1] + jj - 1;
-            let row = &data[nx * (j + ny * k)..nx * (j + ny * k) + nx];
-            for ii in 1..size[0] - 1 {
-                plane[ii + size[0] * jj] = u8::from(row[lo[0] + ii - 1]);
+    values
+        .par_chunks_mut(size[0] * size[1])
+        .enumerate()
+        .for_each(|(kk, plane)| {
+            if kk == 0 || kk == size[2] - 1 {
+                return;
             }
-        }
-    });
+            let k = lo[2] + kk - 1;
+            for jj in 1..size[1] - 1 {
+                let j = lo[1] + jj - 1;
+                let row = &data[nx * (j + ny * k)..nx * (j + ny * k) + nx];
+                for ii in 1..size[0] - 1 {
+                    plane[ii + size[0] * jj] = u8::from(row[lo[0] + ii - 1]);
+                }
+            }
+        });
     debug_assert!(hi[0] < nx && hi[1] < ny && hi[2] < nz);
-    marching_cubes(Grid { values: &values, xs: &xs, ys: &ys, zs: &zs }, 0.5)
+    marching_cubes(
+        Grid {
+            values: &values,
+            xs: &xs,
+            ys: &ys,
+            zs: &zs,
+        },
+        0.5,
+    )
 }
 
 /// Inclusive voxel bounding box `(lo, hi)` of a mask's foreground.
@@ -117,7 +136,10 @@ pub fn bounding_box(mask: &Mask) -> Option<([usize; 3], [usize; 3])> {
                 let (i, j) = (idx % nx, idx / nx);
                 bb = Some(match bb {
                     None => ([i, j, k], [i, j, k]),
-                    Some((lo, hi)) => ([lo[0].min(i), lo[1].min(j), k], [hi[0].max(i), hi[1].max(j), k]),
+                    Some((lo, hi)) => (
+                        [lo[0].min(i), lo[1].min(j), k],
+                        [hi[0].max(i), hi[1].max(j), k],
+                    ),
                 });
             }
             bb
@@ -156,7 +178,9 @@ impl Frame {
     /// Physical (u, v, w) coordinates of voxel centres along frame dim `d`,
     /// for voxel indices `from..to` (indices may run outside the volume).
     pub fn centres(&self, d: usize, from: isize, to: isize) -> Vec<f64> {
-        (from..to).map(|n| (n as f64 + 0.5) * self.spacing[d]).collect()
+        (from..to)
+            .map(|n| (n as f64 + 0.5) * self.spacing[d])
+            .collect()
     }
 
     /// Map a mesh from the (u, v, w) frame to (x, y, z), keeping triangles
@@ -188,42 +212,83 @@ impl Frame {
 /// [`interslice_core::trace::mask_polygons`] (pixel-edge boundaries), with
 /// the slice's centre plane at `w = (index + 0.5) * spacing_w`.
 pub(crate) fn contour_points(input: &SparseMask<'_>, frame: &Frame, step: f64) -> Vec<[f64; 3]> {
-    let [su, sv, sw] = frame.spacing;
-    let (width, height) = (frame.dims[0], frame.dims[1]);
     input
         .drawn
         .par_iter()
         .flat_map_iter(|&d| {
-            let buf = input.mask.slice(input.axis, d).expect("validated drawn index");
-            let w = (d as f64 + 0.5) * sw;
-            let mut out = Vec::new();
-            for poly in mask_polygons(&buf, width, height) {
-                let phys: Vec<[f64; 2]> = poly.iter().map(|p| [p[0] * su, p[1] * sv]).collect();
-                let n = phys.len();
-                let lens: Vec<f64> = (0..n)
-                    .map(|i| {
-                        let (a, b) = (phys[i], phys[(i + 1) % n]);
-                        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
-                    })
-                    .collect();
-                let perimeter: f64 = lens.iter().sum();
-                let count = ((perimeter / step).ceil() as usize).max(4);
-                let ds = perimeter / count as f64;
-                let (mut edge, mut along) = (0usize, 0.0f64);
-                for s in 0..count {
-                    let target = s as f64 * ds;
-                    while edge + 1 < n && along + lens[edge] < target {
-                        along += lens[edge];
-                        edge += 1;
-                    }
-                    let (a, b) = (phys[edge], phys[(edge + 1) % n]);
-                    let t = if lens[edge] > 0.0 { ((target - along) / lens[edge]).clamp(0.0, 1.0) } else { 0.0 };
-                    out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), w]);
-                }
-            }
-            out
+            let buf = input
+                .mask
+                .slice(input.axis, d)
+                .expect("validated drawn index");
+            slice_contours(&buf, d, frame, step)
+                .into_iter()
+                .flat_map(|(_, pts)| pts)
         })
         .collect()
+}
+
+/// The contours of drawn slice `index` (mask `buf`), each as the pixel
+/// `(u, v)` on the foreground side of its first edge and its resampled
+/// points in the physical (u, v, w) frame.
+pub(crate) fn slice_contours(
+    buf: &[bool],
+    index: usize,
+    frame: &Frame,
+    step: f64,
+) -> Vec<([usize; 2], Vec<[f64; 3]>)> {
+    let [su, sv, sw] = frame.spacing;
+    let (width, height) = (frame.dims[0], frame.dims[1]);
+    let w = (index as f64 + 0.5) * sw;
+    let mut out = Vec::new();
+    for poly in mask_polygons(buf, width, height) {
+        let n = poly.len();
+        if n < 2 {
+            continue;
+        }
+        // Foreground is on the left of each edge (u right, v up): the pixel
+        // at the edge midpoint plus half a pixel along the left normal.
+        let (p0, p1) = (poly[0], poly[1]);
+        let len = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2))
+            .sqrt()
+            .max(1e-12);
+        let (du, dv) = ((p1[0] - p0[0]) / len, (p1[1] - p0[1]) / len);
+        let mid = [
+            (p0[0] + p1[0]) / 2.0 - 0.5 * dv,
+            (p0[1] + p1[1]) / 2.0 + 0.5 * du,
+        ];
+        let pixel = [
+            (mid[0].floor().max(0.0) as usize).min(width - 1),
+            (mid[1].floor().max(0.0) as usize).min(height - 1),
+        ];
+        let phys: Vec<[f64; 2]> = poly.iter().map(|p| [p[0] * su, p[1] * sv]).collect();
+        let lens: Vec<f64> = (0..n)
+            .map(|i| {
+                let (a, b) = (phys[i], phys[(i + 1) % n]);
+                ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+            })
+            .collect();
+        let perimeter: f64 = lens.iter().sum();
+        let count = ((perimeter / step).ceil() as usize).max(4);
+        let ds = perimeter / count as f64;
+        let (mut edge, mut along) = (0usize, 0.0f64);
+        let mut pts = Vec::with_capacity(count);
+        for s in 0..count {
+            let target = s as f64 * ds;
+            while edge + 1 < n && along + lens[edge] < target {
+                along += lens[edge];
+                edge += 1;
+            }
+            let (a, b) = (phys[edge], phys[(edge + 1) % n]);
+            let t = if lens[edge] > 0.0 {
+                ((target - along) / lens[edge]).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            pts.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), w]);
+        }
+        out.push((pixel, pts));
+    }
+    out
 }
 
 /// Turn a surface into the method's result: voxelise it on the input's
@@ -244,6 +309,8 @@ pub(crate) struct FieldBox {
     pub size: [usize; 3],
     /// Sample positions along u, v, w.
     pub coords: [Vec<f64>; 3],
+    /// Sample spacing along u, v, w.
+    pub spacing: [f64; 3],
 }
 
 impl FieldBox {
@@ -260,7 +327,11 @@ impl FieldBox {
             size[d] = (b - a + 1).max(1) as usize + 2;
         }
         let coords = std::array::from_fn(|d| frame.centres(d, from[d], from[d] + size[d] as isize));
-        FieldBox { size, coords }
+        FieldBox {
+            size,
+            coords,
+            spacing: frame.spacing,
+        }
     }
 
     /// Number of samples.
@@ -271,7 +342,12 @@ impl FieldBox {
     /// True on the padding layer.
     #[inline]
     pub fn is_padding(&self, a: usize, b: usize, c: usize) -> bool {
-        a == 0 || b == 0 || c == 0 || a + 1 == self.size[0] || b + 1 == self.size[1] || c + 1 == self.size[2]
+        a == 0
+            || b == 0
+            || c == 0
+            || a + 1 == self.size[0]
+            || b + 1 == self.size[1]
+            || c + 1 == self.size[2]
     }
 
     /// Evaluate `f(position)` at every non-padding sample (in parallel over
@@ -279,75 +355,131 @@ impl FieldBox {
     pub fn evaluate(&self, outside: f32, f: impl Fn([f64; 3]) -> f32 + Sync) -> Vec<f32> {
         let [nu, nv, _] = self.size;
         let mut values = vec![outside; self.len()];
-        values.par_chunks_mut(nu * nv).enumerate().for_each(|(c, plane)| {
-            for b in 0..nv {
-                for a in 0..nu {
-                    if !self.is_padding(a, b, c) {
-                        plane[a + nu * b] = f([self.coords[0][a], self.coords[1][b], self.coords[2][c]]);
+        values
+            .par_chunks_mut(nu * nv)
+            .enumerate()
+            .for_each(|(c, plane)| {
+                for b in 0..nv {
+                    for a in 0..nu {
+                        if !self.is_padding(a, b, c) {
+                            plane[a + nu * b] =
+                                f([self.coords[0][a], self.coords[1][b], self.coords[2][c]]);
+                        }
                     }
                 }
-            }
-        });
+            });
+        values
+    }
+
+    /// Approximate distance from every sample to the nearest of `points`:
+    /// the exact distance transform (core's EDT, physical units) of the
+    /// samples nearest to the points, and the bound `e` on its error (half
+    /// a sample diagonal): the true distance lies within `d ± e`. Methods use
+    /// it to evaluate their field exactly only where it matters.
+    pub fn seed_distance(&self, points: &[[f64; 3]]) -> (Vec<f32>, f64) {
+        let mut seeds = vec![false; self.len()];
+        let sp = self.spacing;
+        for p in points {
+            let idx: [usize; 3] = std::array::from_fn(|d| {
+                let x = ((p[d] - self.coords[d][0]) / sp[d]).round();
+                x.clamp(0.0, (self.size[d] - 1) as f64) as usize
+            });
+            seeds[idx[0] + self.size[0] * (idx[1] + self.size[1] * idx[2])] = true;
+        }
+        let d2 = squared_edt_3d_f32(&seeds, self.size, sp);
+        let d: Vec<f32> = d2.into_par_iter().map(f32::sqrt).collect();
+        let e = 0.5 * (sp[0] * sp[0] + sp[1] * sp[1] + sp[2] * sp[2]).sqrt() + 1e-6;
+        (d, e)
+    }
+
+    /// As [`FieldBox::evaluate`], with a cheap first guess per sample:
+    /// `guess(index)` returns `Some(value)` where the caller can settle the
+    /// sample without `f` (e.g. from [`FieldBox::seed_distance`]).
+    pub fn evaluate_guided(
+        &self,
+        outside: f32,
+        guess: impl Fn(usize) -> Option<f32> + Sync,
+        f: impl Fn([f64; 3]) -> f32 + Sync,
+    ) -> Vec<f32> {
+        let [nu, nv, _] = self.size;
+        let mut values = vec![outside; self.len()];
+        values
+            .par_chunks_mut(nu * nv)
+            .enumerate()
+            .for_each(|(c, plane)| {
+                for b in 0..nv {
+                    for a in 0..nu {
+                        if self.is_padding(a, b, c) {
+                            continue;
+                        }
+                        let i = a + nu * b;
+                        plane[i] = match guess(i + nu * nv * c) {
+                            Some(v) => v,
+                            None => f([self.coords[0][a], self.coords[1][b], self.coords[2][c]]),
+                        };
+                    }
+                }
+            });
         values
     }
 
     /// Marching cubes of `values` at `iso` (inside = value > iso).
     pub fn iso_surface(&self, values: &[f32], iso: f32) -> TriMesh {
-        marching_cubes(Grid { values, xs: &self.coords[0], ys: &self.coords[1], zs: &self.coords[2] }, iso)
+        marching_cubes(
+            Grid {
+                values,
+                xs: &self.coords[0],
+                ys: &self.coords[1],
+                zs: &self.coords[2],
+            },
+            iso,
+        )
     }
 
-    /// Mark every sample with value <= iso that cannot be reached from the
-    /// padding through such samples (6-connected) as inside (`fill`), so
-    /// that only the outer surface of the region remains.
-    pub fn fill_cavities(&self, values: &mut [f32], iso: f32, fill: f32) {
-        let [nu, nv, nw] = self.size;
-        let mut reached = vec![false; values.len()];
-        let mut stack: Vec<usize> = Vec::new();
-        for c in 0..nw {
+    /// In every plane of constant w (parallel to the drawn slices), mark the
+    /// samples with value <= iso that cannot be reached from the plane's
+    /// padding ring through such samples as inside (`fill`): the regions a
+    /// field encloses within the plane are filled, which includes every
+    /// cavity enclosed in 3D. Outside samples are 8-connected in the plane,
+    /// the complement of the 4-connected inside that marching cubes keeps
+    /// (diagonal inside corners stay apart), so the fill agrees with the
+    /// surface extracted afterwards.
+    pub fn fill_plane_holes(&self, values: &mut [f32], iso: f32, fill: f32) {
+        let [nu, nv, _] = self.size;
+        values.par_chunks_mut(nu * nv).for_each(|plane| {
+            let mut reached = vec![false; plane.len()];
+            let mut stack: Vec<usize> = Vec::new();
             for b in 0..nv {
                 for a in 0..nu {
-                    if self.is_padding(a, b, c) {
-                        let i = a + nu * (b + nv * c);
-                        if values[i] <= iso {
-                            reached[i] = true;
-                            stack.push(i);
+                    let i = a + nu * b;
+                    if (a == 0 || b == 0 || a + 1 == nu || b + 1 == nv) && plane[i] <= iso {
+                        reached[i] = true;
+                        stack.push(i);
+                    }
+                }
+            }
+            while let Some(i) = stack.pop() {
+                let (a, b) = ((i % nu) as isize, (i / nu) as isize);
+                for db in -1isize..=1 {
+                    for da in -1isize..=1 {
+                        let (x, y) = (a + da, b + db);
+                        if x < 0 || y < 0 || x >= nu as isize || y >= nv as isize {
+                            continue;
+                        }
+                        let j = x as usize + nu * y as usize;
+                        if !reached[j] && plane[j] <= iso {
+                            reached[j] = true;
+                            stack.push(j);
                         }
                     }
                 }
             }
-        }
-        while let Some(i) = stack.pop() {
-            let (a, b, c) = (i % nu, (i / nu) % nv, i / (nu * nv));
-            let mut visit = |j: usize| {
-                if !reached[j] && values[j] <= iso {
-                    reached[j] = true;
-                    stack.push(j);
+            for (v, r) in plane.iter_mut().zip(reached) {
+                if !r && *v <= iso {
+                    *v = fill;
                 }
-            };
-            if a > 0 {
-                visit(i - 1);
             }
-            if a + 1 < nu {
-                visit(i + 1);
-            }
-            if b > 0 {
-                visit(i - nu);
-            }
-            if b + 1 < nv {
-                visit(i + nu);
-            }
-            if c > 0 {
-                visit(i - nu * nv);
-            }
-            if c + 1 < nw {
-                visit(i + nu * nv);
-            }
-        }
-        for (v, r) in values.iter_mut().zip(reached) {
-            if !r && *v <= iso {
-                *v = fill;
-            }
-        }
+        });
     }
 }
 
@@ -369,6 +501,27 @@ pub(crate) fn mean_gap(input: &SparseMask<'_>, frame: &Frame) -> f64 {
         return frame.spacing[2];
     }
     (d[d.len() - 1] - d[0]) as f64 / (d.len() - 1) as f64 * frame.spacing[2]
+}
+
+/// The largest physical gap between two consecutive drawn slices that both
+/// hold foreground (0 when no such pair exists). A drawn-empty slice in
+/// between ends an object, so it breaks the pair.
+pub(crate) fn max_filled_gap(input: &SparseMask<'_>, frame: &Frame) -> f64 {
+    let filled: Vec<bool> = input
+        .drawn
+        .par_iter()
+        .map(|&d| {
+            let s = input
+                .mask
+                .slice(input.axis, d)
+                .expect("validated drawn index");
+            s.iter().any(|&v| v)
+        })
+        .collect();
+    (1..input.drawn.len())
+        .filter(|&i| filled[i - 1] && filled[i])
+        .map(|i| (input.drawn[i] - input.drawn[i - 1]) as f64 * frame.spacing[2])
+        .fold(0.0, f64::max)
 }
 
 /// `marching-cubes`: the original method. Marching cubes (iso 0.5) on the
@@ -406,7 +559,12 @@ fn stack_surface(input: &SparseMask<'_>) -> TriMesh {
     let slices: Vec<Vec<bool>> = input
         .drawn
         .par_iter()
-        .map(|&d| input.mask.slice(input.axis, d).expect("validated drawn index"))
+        .map(|&d| {
+            input
+                .mask
+                .slice(input.axis, d)
+                .expect("validated drawn index")
+        })
         .collect();
     // In-plane bounding box over all drawn slices.
     let mut lo = [usize::MAX; 2];
@@ -431,18 +589,29 @@ fn stack_surface(input: &SparseMask<'_>) -> TriMesh {
     ws.extend(d.iter().map(|&k| (k as f64 + 0.5) * sw));
     ws.push((d[d.len() - 1] as f64 + 1.5) * sw);
     let mut values = vec![0u8; size[0] * size[1] * size[2]];
-    values.par_chunks_mut(size[0] * size[1]).enumerate().for_each(|(m, plane)| {
-        if m == 0 || m == size[2] - 1 {
-            return;
-        }
-        let s = &slices[m - 1];
-        for b in 1..size[1] - 1 {
-            for a in 1..size[0] - 1 {
-                plane[a + size[0] * b] = u8::from(s[(lo[0] + a - 1) + w * (lo[1] + b - 1)]);
+    values
+        .par_chunks_mut(size[0] * size[1])
+        .enumerate()
+        .for_each(|(m, plane)| {
+            if m == 0 || m == size[2] - 1 {
+                return;
             }
-        }
-    });
+            let s = &slices[m - 1];
+            for b in 1..size[1] - 1 {
+                for a in 1..size[0] - 1 {
+                    plane[a + size[0] * b] = u8::from(s[(lo[0] + a - 1) + w * (lo[1] + b - 1)]);
+                }
+            }
+        });
     debug_assert!(hi[1] < h);
-    let mesh = marching_cubes(Grid { values: &values, xs: &us, ys: &vs, zs: &ws }, 0.5);
+    let mesh = marching_cubes(
+        Grid {
+            values: &values,
+            xs: &us,
+            ys: &vs,
+            zs: &ws,
+        },
+        0.5,
+    );
     frame.to_xyz(mesh)
 }

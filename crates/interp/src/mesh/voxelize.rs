@@ -62,15 +62,57 @@ fn crossing(p: &[Coord<f64>; 3], xs: [f64; 3], orient: i8, q: Coord<f64>) -> Opt
     Some((wa * xs[0] + wb * xs[1] + wc * xs[2]) / sum)
 }
 
+/// Position of voxel centre `n` along an axis of spacing `s`, computed the
+/// same way everywhere (mesh builders place vertices with this formula).
+#[inline]
+fn centre(n: usize, s: f64) -> f64 {
+    (n as f64 + 0.5) * s
+}
+
 /// Index range `lo..=hi` of voxel centres `(n + 0.5) * s` within `[a, b]`,
 /// clamped to `0..len`; `None` when empty.
+///
+/// The estimate from `a / s` is corrected by comparing with the centre
+/// positions themselves: a vertex placed exactly on a centre plane (as
+/// marching-cubes vertices are) must count as touching it, and rounding in
+/// `a / s - 0.5` could otherwise move the bound by one (e.g. `26.5 * 0.8`).
 fn centre_range(a: f64, b: f64, s: f64, len: usize) -> Option<(usize, usize)> {
-    let lo = ((a / s - 0.5).ceil()).max(0.0);
-    let hi = ((b / s - 0.5).floor()).min(len as f64 - 1.0);
-    if !(lo <= hi) {
+    if len == 0 || !(a <= b) {
         return None;
     }
-    Some((lo as usize, hi as usize))
+    let last = len - 1;
+    let est = |x: f64| -> usize { (x / s - 0.5).clamp(0.0, last as f64) as usize };
+    // Smallest n with centre(n) >= a.
+    let mut lo = est(a);
+    while lo > 0 && centre(lo - 1, s) >= a {
+        lo -= 1;
+    }
+    while lo <= last && centre(lo, s) < a {
+        lo += 1;
+    }
+    // Largest n with centre(n) <= b.
+    let mut hi = est(b);
+    while hi < last && centre(hi + 1, s) <= b {
+        hi += 1;
+    }
+    loop {
+        if centre(hi, s) <= b {
+            break;
+        }
+        if hi == 0 {
+            return None;
+        }
+        hi -= 1;
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// Index range `lo..=hi` of voxel centres with `a < centre <= b` (the part
+/// of a row between two crossings), clamped to `0..len`.
+fn open_closed_range(a: f64, b: f64, s: f64, len: usize) -> Option<(usize, usize)> {
+    let (lo, hi) = centre_range(a, b, s, len)?;
+    let lo = if centre(lo, s) == a { lo + 1 } else { lo };
+    (lo <= hi).then_some((lo, hi))
 }
 
 /// Voxelise a closed mesh (physical units, see [`TriMesh`]) into a mask of
@@ -92,48 +134,54 @@ pub fn voxelize(mesh: &TriMesh, geometry: &Geometry) -> Mask {
         }
     }
     let mut data = vec![false; nx * ny * nz];
-    data.par_chunks_mut(nx * ny).zip(buckets.par_iter()).enumerate().for_each(|(k, (plane, bucket))| {
-        if bucket.is_empty() {
-            return;
-        }
-        let z = (k as f64 + 0.5) * sz;
-        let mut hits: Vec<(u32, f64)> = Vec::new();
-        for &t in bucket {
-            let c = mesh.corners(t as usize);
-            let p = c.map(|v| Coord { x: v[1], y: v[2] });
-            let area = orient2d(p[0], p[1], p[2]);
-            if area == 0.0 {
-                continue;
+    data.par_chunks_mut(nx * ny)
+        .zip(buckets.par_iter())
+        .enumerate()
+        .for_each(|(k, (plane, bucket))| {
+            if bucket.is_empty() {
+                return;
             }
-            let orient = if area > 0.0 { 1 } else { -1 };
-            let ymin = c[0][1].min(c[1][1]).min(c[2][1]);
-            let ymax = c[0][1].max(c[1][1]).max(c[2][1]);
-            let Some((j0, j1)) = centre_range(ymin, ymax, sy, ny) else { continue };
-            let xs = [c[0][0], c[1][0], c[2][0]];
-            for j in j0..=j1 {
-                let q = Coord { x: (j as f64 + 0.5) * sy, y: z };
-                if let Some(x) = crossing(&p, xs, orient, q) {
-                    hits.push((j as u32, x));
+            let z = centre(k, sz);
+            let mut hits: Vec<(u32, f64)> = Vec::new();
+            for &t in bucket {
+                let c = mesh.corners(t as usize);
+                let p = c.map(|v| Coord { x: v[1], y: v[2] });
+                let area = orient2d(p[0], p[1], p[2]);
+                if area == 0.0 {
+                    continue;
+                }
+                let orient = if area > 0.0 { 1 } else { -1 };
+                let ymin = c[0][1].min(c[1][1]).min(c[2][1]);
+                let ymax = c[0][1].max(c[1][1]).max(c[2][1]);
+                let Some((j0, j1)) = centre_range(ymin, ymax, sy, ny) else {
+                    continue;
+                };
+                let xs = [c[0][0], c[1][0], c[2][0]];
+                for j in j0..=j1 {
+                    let q = Coord {
+                        x: centre(j, sy),
+                        y: z,
+                    };
+                    if let Some(x) = crossing(&p, xs, orient, q) {
+                        hits.push((j as u32, x));
+                    }
                 }
             }
-        }
-        hits.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
-        for row in hits.chunk_by(|a, b| a.0 == b.0) {
-            let j = row[0].0 as usize;
-            let line = &mut plane[nx * j..nx * (j + 1)];
-            for pair in row.chunks(2) {
-                if pair.len() < 2 {
-                    break;
-                }
-                // Centres with x0 < x <= x1 are inside.
-                let lo = ((pair[0].1 / sx - 0.5).floor() + 1.0).max(0.0);
-                let hi = ((pair[1].1 / sx - 0.5).floor()).min(nx as f64 - 1.0);
-                if lo <= hi {
-                    line[lo as usize..=hi as usize].fill(true);
+            hits.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            for row in hits.chunk_by(|a, b| a.0 == b.0) {
+                let j = row[0].0 as usize;
+                let line = &mut plane[nx * j..nx * (j + 1)];
+                for pair in row.chunks(2) {
+                    if pair.len() < 2 {
+                        break;
+                    }
+                    // Centres with x0 < x <= x1 are inside.
+                    if let Some((lo, hi)) = open_closed_range(pair[0].1, pair[1].1, sx, nx) {
+                        line[lo..=hi].fill(true);
+                    }
                 }
             }
-        }
-    });
+        });
     Volume::from_vec(geometry.clone(), data).expect("data length matches the geometry")
 }
 
@@ -147,6 +195,14 @@ mod tests {
         assert_eq!(centre_range(0.5, 2.5, 1.0, 10), Some((0, 2)));
         assert_eq!(centre_range(0.6, 1.4, 1.0, 10), None);
         assert_eq!(centre_range(-5.0, 50.0, 1.0, 10), Some((0, 9)));
+        assert_eq!(centre_range(-5.0, -1.0, 1.0, 10), None);
+        assert_eq!(centre_range(11.0, 12.0, 1.0, 10), None);
+        // 26.5 * 0.8 / 0.8 - 0.5 rounds above 26: the centre must still count.
+        let z = centre(26, 0.8);
+        assert!(z / 0.8 - 0.5 > 26.0);
+        assert_eq!(centre_range(z, z + 0.1, 0.8, 40), Some((26, 26)));
+        assert_eq!(centre_range(z - 0.1, z, 0.8, 40), Some((26, 26)));
+        assert_eq!(open_closed_range(z, z + 0.9, 0.8, 40), Some((27, 27)));
     }
 
     #[test]
@@ -159,7 +215,13 @@ mod tests {
         let q = Coord { x: 1.0, y: 1.0 };
         let t1 = [a, b, c];
         let t2 = [a, d, b];
-        let o = |t: &[Coord<f64>; 3]| if orient2d(t[0], t[1], t[2]) > 0.0 { 1 } else { -1 };
+        let o = |t: &[Coord<f64>; 3]| {
+            if orient2d(t[0], t[1], t[2]) > 0.0 {
+                1
+            } else {
+                -1
+            }
+        };
         let h1 = crossing(&t1, [0.0; 3], o(&t1), q).is_some();
         let h2 = crossing(&t2, [0.0; 3], o(&t2), q).is_some();
         assert!(h1 ^ h2);
@@ -179,8 +241,18 @@ mod tests {
                 ]
             })
             .collect();
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let mut m = TriMesh { vertices: v, triangles: vec![] };
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut m = TriMesh {
+            vertices: v,
+            triangles: vec![],
+        };
         for q in quads {
             m.triangles.push([q[0], q[1], q[2]]);
             m.triangles.push([q[0], q[2], q[3]]);

@@ -1,0 +1,162 @@
+//! `interslice convert IN OUT`: any supported volume format to any other.
+//! Values and geometry are copied unchanged; when the target cannot hold the
+//! voxel type without loss (a float volume to PNG slices) nothing is written
+//! and the command fails.
+use anyhow::Context;
+use interslice_io::Format;
+use std::path::PathBuf;
+
+/// Arguments of `convert`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The volume file or slice folder to read.
+    pub input: PathBuf,
+    /// The file or folder to write; its extension picks the format (.nii,
+    /// .nii.gz, .nrrd, .mha, .mhd, .tif; a folder, or a name without an
+    /// extension, for PNG slices).
+    pub output: PathBuf,
+    /// Store the volume as labels: integer values 0..=65535, written as u8
+    /// when the largest is at most 255, else u16 (fails on other values).
+    #[arg(long)]
+    pub labels: bool,
+}
+
+/// Run `convert`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    // Check both formats before reading a possibly large input.
+    Format::of_path(&args.input)?;
+    let out_format = Format::of_path(&args.output)?;
+    if args.labels {
+        let v = interslice_io::read_labels(&args.input)?;
+        interslice_io::write_labels(&args.output, &v)?;
+        let n = v.label_counts().len();
+        let [nx, ny, nz] = v.dims();
+        println!(
+            "wrote {} ({}, {nx} x {ny} x {nz}, {n} labels)",
+            args.output.display(),
+            out_format.name()
+        );
+        return Ok(());
+    }
+    let v = interslice_io::read_volume(&args.input)?;
+    interslice_io::write_volume(&args.output, &v).with_context(|| {
+        format!(
+            "cannot convert {} ({}) to {}",
+            args.input.display(),
+            v.type_name(),
+            out_format.name()
+        )
+    })?;
+    let [nx, ny, nz] = v.geometry().dims;
+    println!(
+        "wrote {} ({}, {}, {nx} x {ny} x {nz})",
+        args.output.display(),
+        out_format.name(),
+        v.type_name()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
+
+    fn geometry() -> Geometry {
+        let mut g = Geometry::new([4, 3, 2], [0.35, 0.35, 0.7], LengthUnit::Micrometre).unwrap();
+        g.origin = [1.0, -2.0, 3.5];
+        g
+    }
+
+    fn convert(
+        input: &std::path::Path,
+        output: &std::path::Path,
+        labels: bool,
+    ) -> anyhow::Result<()> {
+        run(Args {
+            input: input.to_path_buf(),
+            output: output.to_path_buf(),
+            labels,
+        })
+    }
+
+    #[test]
+    fn converts_between_every_pair_of_formats() {
+        let dir = tempfile::tempdir().unwrap();
+        let g = geometry();
+        let v = AnyVolume::U16(
+            Volume::from_vec(g.clone(), (0..24).map(|x| x * 1000).collect()).unwrap(),
+        );
+        let names = [
+            "a.nii", "a.nii.gz", "a.nrrd", "a.mha", "a.mhd", "a.tif", "a_slices",
+        ];
+        for (n, from) in names.iter().enumerate() {
+            let src = dir.path().join(format!("src_{from}"));
+            interslice_io::write_volume(&src, &v).unwrap();
+            for to in names {
+                let dst = dir.path().join(format!("from{n}_{to}"));
+                convert(&src, &dst, false).unwrap();
+                assert_eq!(
+                    interslice_io::read_volume(&dst).unwrap(),
+                    v,
+                    "{from} -> {to}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn refuses_a_lossy_target_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = dir.path().join("f.nrrd");
+        let f = AnyVolume::F32(Volume::from_vec(geometry(), vec![0.5; 24]).unwrap());
+        interslice_io::write_volume(&src, &f).unwrap();
+        let out = dir.path().join("slices");
+        let e = format!("{:#}", convert(&src, &out, false).unwrap_err());
+        assert!(e.contains("f32") && !e.contains('\n'), "{e}");
+        assert!(!out.exists());
+        // As labels it fails too: 0.5 is not a label.
+        assert!(convert(&src, &out, true).is_err());
+        assert!(!out.exists());
+    }
+
+    #[test]
+    fn labels_are_narrowed_to_u8() {
+        let dir = tempfile::tempdir().unwrap();
+        let src = dir.path().join("l.nii.gz");
+        let v =
+            AnyVolume::U16(Volume::from_vec(geometry(), (0..24).map(|x| x % 3).collect()).unwrap());
+        interslice_io::write_volume(&src, &v).unwrap();
+        let out = dir.path().join("l.nrrd");
+        convert(&src, &out, true).unwrap();
+        let back = interslice_io::read_volume(&out).unwrap();
+        assert_eq!(back.type_name(), "u8");
+        assert_eq!(back.to_labels().unwrap(), v.to_labels().unwrap());
+    }
+
+    #[test]
+    fn missing_input_and_unknown_format() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = format!(
+            "{:#}",
+            convert(
+                &dir.path().join("none.nii"),
+                &dir.path().join("x.nrrd"),
+                false
+            )
+            .unwrap_err()
+        );
+        assert!(e.contains("none.nii") && e.contains("No such file"), "{e}");
+        assert_eq!(e.matches("No such file").count(), 1, "{e}");
+        let e = format!(
+            "{:#}",
+            convert(
+                &dir.path().join("none.nii"),
+                &dir.path().join("x.jpg"),
+                false
+            )
+            .unwrap_err()
+        );
+        assert!(e.contains("x.jpg"), "{e}");
+    }
+}

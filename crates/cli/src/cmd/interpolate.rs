@@ -1,0 +1,110 @@
+//! `interslice interpolate SPARSE --out OUT [--method M] [--axis z|y|x] [--drawn FILE]`
+//! and `interslice interpolate --list`.
+//!
+//! SPARSE is a label volume whose drawn slices carry the tracings. Drawn
+//! slices are the slices with any non-zero voxel along `--axis`, or exactly
+//! the indices listed in `--drawn FILE` (one integer a line; a listed slice
+//! without voxels is a known-empty slice). Every label is interpolated on its
+//! own; OUT has the geometry and voxel type of SPARSE, in the format its
+//! extension names.
+use anyhow::{Context, Result, bail};
+use interslice_core::{AnyVolume, Axis, LabelVolume, Volume};
+use interslice_interp::drawn::{nonempty_slices, parse_drawn};
+use interslice_interp::{DEFAULT_METHOD, by_name, interpolate_labels, methods};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `interpolate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The sparse label volume (drawn slices carry the tracings).
+    #[arg(required_unless_present = "list")]
+    pub sparse: Option<PathBuf>,
+    /// Output label volume; the format follows the extension.
+    #[arg(long, required_unless_present = "list")]
+    pub out: Option<PathBuf>,
+    /// Interpolation method (see `--list`); the default is the best measured one.
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Axis the slices were drawn along.
+    #[arg(long, default_value = "z")]
+    pub axis: Axis,
+    /// File listing the drawn slice indices, one integer a line (`#` comments allowed).
+    #[arg(long)]
+    pub drawn: Option<PathBuf>,
+    /// Print the available methods (the default first) and exit.
+    #[arg(long)]
+    pub list: bool,
+}
+
+/// Run `interpolate`.
+pub fn run(a: Args) -> Result<()> {
+    if a.list {
+        for m in methods() {
+            let tag = if m.name() == DEFAULT_METHOD {
+                " (default)"
+            } else {
+                ""
+            };
+            println!("{:<20} {}{tag}", m.name(), m.description());
+        }
+        return Ok(());
+    }
+    let (Some(sparse_path), Some(out)) = (a.sparse, a.out) else {
+        bail!("interpolate needs SPARSE and --out (or --list)");
+    };
+    let method = by_name(a.method.as_deref().unwrap_or(DEFAULT_METHOD))?;
+    let input = interslice_io::read_volume(&sparse_path)
+        .with_context(|| format!("reading {}", sparse_path.display()))?;
+    let sparse = input
+        .to_labels()
+        .with_context(|| format!("{} is not a label volume", sparse_path.display()))?;
+    let drawn = drawn_slices(&sparse, a.axis, a.drawn.as_deref())?;
+    let result = interpolate_labels(method.as_ref(), &sparse, a.axis, &drawn)
+        .with_context(|| format!("method {}", method.name()))?;
+    let written = same_type(&input, result)?;
+    interslice_io::write_volume(&out, &written)
+        .with_context(|| format!("writing {}", out.display()))?;
+    Ok(())
+}
+
+/// The drawn slices: the `--drawn` file's indices, or the non-empty slices.
+pub fn drawn_slices(sparse: &LabelVolume, axis: Axis, file: Option<&Path>) -> Result<Vec<usize>> {
+    let count = sparse.slice_count(axis);
+    let drawn = match file {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("reading drawn list {}", p.display()))?;
+            parse_drawn(&text, count).with_context(|| p.display().to_string())?
+        }
+        None => nonempty_slices(sparse, axis),
+    };
+    if drawn.len() < 2 {
+        bail!(
+            "interpolation needs at least two drawn slices along {axis}, found {} \
+             (drawn slices are those with a non-zero voxel, or listed with --drawn)",
+            drawn.len()
+        );
+    }
+    Ok(drawn)
+}
+
+/// The interpolated labels in the voxel type of the input (labels fit: they
+/// come from the input).
+fn same_type(input: &AnyVolume, labels: LabelVolume) -> Result<AnyVolume> {
+    let (g, data) = labels.into_parts();
+    Ok(match input {
+        AnyVolume::U8(_) => AnyVolume::U8(Volume::from_vec(
+            g,
+            data.iter().map(|&x| x as u8).collect(),
+        )?),
+        AnyVolume::U16(_) => AnyVolume::U16(Volume::from_vec(g, data)?),
+        AnyVolume::I16(_) => AnyVolume::I16(Volume::from_vec(
+            g,
+            data.iter().map(|&x| x as i16).collect(),
+        )?),
+        AnyVolume::F32(_) => AnyVolume::F32(Volume::from_vec(
+            g,
+            data.iter().map(|&x| f32::from(x)).collect(),
+        )?),
+    })
+}

@@ -1,0 +1,94 @@
+//! `interslice study` through the binary on a small phantom: every output is
+//! written, rows cover every (method, skip, label), and k = 0 is exact.
+use std::process::Command;
+
+#[test]
+fn study_writes_csv_json_plots_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
+        size: 48,
+        seed: 3,
+        bits: 8,
+        noise: 0.0,
+    })
+    .unwrap();
+    let gt = dir.path().join("gt.nii.gz");
+    interslice_io::write_labels(&gt, &p.labels).unwrap();
+    let out = dir.path().join("study");
+    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
+        .arg("study")
+        .arg(&gt)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--skips",
+            "0..3",
+            "--methods",
+            "shape-based,linear",
+            "--label",
+            "2",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    for f in [
+        "results.csv",
+        "results.json",
+        "summary.md",
+        "dice.svg",
+        "jaccard.svg",
+        "hd95.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * 4, "{csv}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8);
+    for r in rows {
+        assert_eq!(r["label"], 2);
+        if r["skip"] == 0 {
+            assert_eq!(r["metrics"]["dice"], 1.0, "{r}");
+        }
+    }
+    let svg = std::fs::read_to_string(out.join("dice.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("shape-based"),
+        "{}",
+        &svg[..200.min(svg.len())]
+    );
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("| shape-based |") && md.contains("k=3"), "{md}");
+}
+
+#[test]
+fn study_rejects_bad_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
+            .arg("study")
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!r.status.success());
+        String::from_utf8_lossy(&r.stderr).to_string()
+    };
+    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
+        size: 32,
+        seed: 1,
+        bits: 8,
+        noise: 0.0,
+    })
+    .unwrap();
+    let gt = dir.path().join("gt.nrrd");
+    interslice_io::write_labels(&gt, &p.labels).unwrap();
+    let gt = gt.to_str().unwrap();
+    let out = dir.path().join("o");
+    let out = out.to_str().unwrap();
+    assert!(run(&[gt, "--out", out, "--skips", "9..2"]).contains("--skips"));
+    assert!(run(&[gt, "--out", out, "--methods", "nope"]).contains("unknown method"));
+    assert!(run(&[gt, "--out", out, "--label", "99"]).contains("label 99"));
+}

@@ -1,0 +1,61 @@
+//! Interpolation speed: `shape-based` and the default method on a 256³ label
+//! volume drawn every 10th slice (k = 9 skipped), and every registered
+//! method on the 200³ phantom at k = 9.
+//!
+//! `cargo bench -p interslice-interp --bench interp`
+use criterion::{Criterion, criterion_group, criterion_main};
+use interslice_core::phantom::{PhantomParams, generate};
+use interslice_core::{Axis, LabelVolume, Volume};
+use interslice_interp::{DEFAULT_METHOD, by_name, interpolate_labels, methods};
+use std::hint::black_box;
+
+/// The phantom's labels with every slice but the drawn ones erased.
+fn sparse(size: usize, k: usize) -> (LabelVolume, Vec<usize>) {
+    let p = generate(&PhantomParams {
+        size,
+        seed: 1,
+        bits: 8,
+        noise: 0.0,
+    })
+    .expect("phantom");
+    let nonempty = interslice_interp::drawn::nonempty_slices(&p.labels, Axis::Z);
+    let (first, last) = (nonempty[0], *nonempty.last().expect("non-empty"));
+    let mut drawn: Vec<usize> = (first..=last).step_by(k + 1).collect();
+    if drawn.last() != Some(&last) {
+        drawn.push(last);
+    }
+    let mut s: LabelVolume = Volume::zeros(p.labels.geometry().clone());
+    for &d in &drawn {
+        s.set_slice(Axis::Z, d, &p.labels.slice(Axis::Z, d).expect("in range"))
+            .expect("same");
+    }
+    (s, drawn)
+}
+
+fn bench_256(c: &mut Criterion) {
+    let (s, drawn) = sparse(256, 9);
+    let mut g = c.benchmark_group("interp_256_k9");
+    g.sample_size(10);
+    for name in ["shape-based", DEFAULT_METHOD] {
+        let m = by_name(name).expect("registered");
+        g.bench_function(name, |b| {
+            b.iter(|| interpolate_labels(m.as_ref(), black_box(&s), Axis::Z, &drawn).expect("ok"))
+        });
+    }
+    g.finish();
+}
+
+fn bench_phantom_200(c: &mut Criterion) {
+    let (s, drawn) = sparse(200, 9);
+    let mut g = c.benchmark_group("interp_200_k9");
+    g.sample_size(10);
+    for m in methods() {
+        g.bench_function(m.name(), |b| {
+            b.iter(|| interpolate_labels(m.as_ref(), black_box(&s), Axis::Z, &drawn).expect("ok"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_256, bench_phantom_200);
+criterion_main!(benches);

@@ -1,0 +1,131 @@
+//! Property tests of the geometry invariants every registered method keeps,
+//! on random blobs, random drawn slices, any axis and anisotropic spacing;
+//! and the multi-label contract of `interpolate_labels`.
+use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
+use interslice_interp::{SparseMask, interpolate_labels, methods};
+use proptest::prelude::*;
+
+/// Up to three random ellipsoids in a small anisotropic volume.
+fn blobs() -> impl Strategy<Value = Mask> {
+    let ell = (
+        0.0f64..1.0,
+        0.0f64..1.0,
+        0.0f64..1.0,
+        2.0f64..7.0,
+        2.0f64..7.0,
+        2.0f64..9.0,
+    );
+    (prop::collection::vec(ell, 1..4), 0.4f64..1.5).prop_map(|(es, sz)| {
+        let dims = [18, 16, 20];
+        let g = Geometry::new(dims, [1.0, 0.8, sz], LengthUnit::Micrometre).unwrap();
+        let mut m: Mask = Volume::zeros(g);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let p = [i as f64 / 18.0, j as f64 / 16.0, k as f64 / 20.0];
+                    let inside = es.iter().any(|e| {
+                        ((p[0] - e.0) * 18.0 / e.3).powi(2)
+                            + ((p[1] - e.1) * 16.0 / e.4).powi(2)
+                            + ((p[2] - e.2) * 20.0 / e.5).powi(2)
+                            <= 1.0
+                    });
+                    m.set(i, j, k, inside);
+                }
+            }
+        }
+        m
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn drawn_slices_are_kept_and_drawn_empty_slices_stay_empty(
+        full in blobs(),
+        axis in prop::sample::select(Axis::ALL.to_vec()),
+        picks in prop::collection::btree_set(0usize..16, 2..7),
+    ) {
+        let n = full.slice_count(axis);
+        let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
+        prop_assume!(drawn.len() >= 2);
+        let mut sparse: Mask = Volume::zeros(full.geometry().clone());
+        for &d in &drawn {
+            sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
+        }
+        for m in methods() {
+            let out = m.interpolate(SparseMask { mask: &sparse, axis, drawn: &drawn }).unwrap();
+            prop_assert_eq!(out.geometry(), full.geometry());
+            for &d in &drawn {
+                prop_assert_eq!(
+                    out.slice(axis, d).unwrap(),
+                    full.slice(axis, d).unwrap(),
+                    "{} changed drawn slice {}={}", m.name(), axis, d
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn labels_are_interpolated_each_on_its_own_and_painted_in_order() {
+    // A cell (1) holding a nucleus (2) holding a nucleolus (3); the cell's
+    // drawn voxels have the nucleus cut out, as in a painted label volume.
+    let g = Geometry::new([30, 30, 30], [1.0, 1.0, 1.0], LengthUnit::Micrometre).unwrap();
+    let mut full: LabelVolume = Volume::zeros(g);
+    for k in 0..30 {
+        for j in 0..30 {
+            for i in 0..30 {
+                let r = |c: [f64; 3], rad: f64| {
+                    ((i as f64 - c[0]).powi(2)
+                        + (j as f64 - c[1]).powi(2)
+                        + (k as f64 - c[2]).powi(2))
+                    .sqrt()
+                        <= rad
+                };
+                let l = if r([15.0, 15.0, 15.0], 3.5) {
+                    3
+                } else if r([15.0, 15.0, 15.0], 7.0) {
+                    2
+                } else if r([15.0, 15.0, 15.0], 13.0) {
+                    1
+                } else {
+                    0
+                };
+                full.set(i, j, k, l);
+            }
+        }
+    }
+    let drawn: Vec<usize> = (1..30).step_by(4).collect();
+    let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
+    for &d in &drawn {
+        sparse
+            .set_slice(Axis::Z, d, &full.slice(Axis::Z, d).unwrap())
+            .unwrap();
+    }
+    for m in methods() {
+        let out = interpolate_labels(m.as_ref(), &sparse, Axis::Z, &drawn).unwrap();
+        for &d in &drawn {
+            assert_eq!(
+                out.slice(Axis::Z, d).unwrap(),
+                full.slice(Axis::Z, d).unwrap(),
+                "{}",
+                m.name()
+            );
+        }
+        for l in 1..=3u16 {
+            let (mut tp, mut n) = (0usize, 0usize);
+            for (&a, &b) in out.data().iter().zip(full.data()) {
+                tp += (a == l && b == l) as usize;
+                n += (a == l) as usize + (b == l) as usize;
+            }
+            let dice = 2.0 * tp as f64 / n as f64;
+            // The cell must not be hollowed out where the nucleus is: label 1
+            // around label 2 on the skipped slice in the middle is a ring.
+            assert!(dice > 0.6, "{} label {l}: Dice {dice:.3}", m.name());
+        }
+        // The centre of a skipped slice inside the nucleolus carries label 3.
+        assert_eq!(out.get(15, 15, 15), 3, "{}", m.name());
+        assert_eq!(out.get(15, 15 - 10, 15), 1, "{}", m.name());
+    }
+}
