@@ -1,4 +1,4 @@
-//! Volume and mesh file formats: NIfTI, NRRD, MetaImage, TIFF, slice folders, DICOM.
+//! Volume and mesh file formats: NIfTI, NRRD, MetaImage, TIFF stacks and slice folders.
 //!
 //! [`read_volume`] and [`write_volume`] pick the format from the path (see
 //! [`Format::of_path`]); geometry (dims, spacing, unit, origin, direction) is

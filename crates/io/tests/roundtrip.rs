@@ -301,3 +301,36 @@ fn tiff_pages_are_contiguous_with_imagej_metadata() {
         assert_eq!(*o, offsets[0] + k as u64 * page);
     }
 }
+
+/// PNG slices of other tools: 1-bit masks keep their stored values (0/1,
+/// never stretched to 255) and a folder without our text chunk gets spacing 1.
+#[test]
+fn one_bit_png_slices_are_unpacked_without_scaling() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("masks");
+    std::fs::create_dir(&folder).unwrap();
+    for k in 0..3u8 {
+        let f = std::fs::File::create(folder.join(format!("m{k}.png"))).unwrap();
+        let mut enc = png::Encoder::new(f, 10, 2);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::One);
+        let mut w = enc.write_header().unwrap();
+        // Row 0: pixels 0..8 = 1010_0000 shifted by k, pixel 8, 9 = 1 1; row 1: all 0.
+        w.write_image_data(&[0b1010_0000 >> k, 0b1100_0000, 0, 0])
+            .unwrap();
+    }
+    let v = read_labels(&folder).unwrap();
+    assert_eq!(v.dims(), [10, 2, 3]);
+    assert_eq!(v.geometry().spacing, [1.0; 3]);
+    assert_eq!(v.geometry().unit, LengthUnit::Unknown);
+    for k in 0..3 {
+        let row: Vec<u16> = (0..10).map(|i| v.get(i, 0, k)).collect();
+        let mut want = vec![0u16; 10];
+        want[k] = 1;
+        want[k + 2] = 1;
+        want[8] = 1;
+        want[9] = 1;
+        assert_eq!(row, want, "slice {k}");
+        assert!((0..10).all(|i| v.get(i, 1, k) == 0));
+    }
+}
