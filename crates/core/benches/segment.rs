@@ -29,8 +29,10 @@ fn volume(n: usize) -> AnyVolume {
 }
 
 fn rater(truth: &Mask, flip: f64, seed: u64) -> Mask {
+    // Flips drawn in storage order so the rater is the same on any thread count.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    truth.map(|t| if rng.gen_bool(flip) { !t } else { t })
+    let data = truth.data().iter().map(|&t| if rng.gen_bool(flip) { !t } else { t }).collect();
+    Mask::from_vec(truth.geometry().clone(), data).unwrap()
 }
 
 fn benches(c: &mut Criterion) {

@@ -43,7 +43,8 @@ struct Runs {
 fn runs_of(data: &[bool], dims: [usize; 3], value: bool) -> Runs {
     let [nx, ny, _] = dims;
     // Per z-slab in parallel, then concatenated in order.
-    let per_slab: Vec<(Vec<usize>, Vec<(u32, u32)>)> = data
+    type SlabRuns = (Vec<usize>, Vec<(u32, u32)>);
+    let per_slab: Vec<SlabRuns> = data
         .par_chunks(nx * ny)
         .map(|slab| {
             let mut counts = Vec::with_capacity(ny);

@@ -100,7 +100,7 @@ fn polygon_spans(poly: &[[f64; 2]], width: usize, height: usize, out: &mut Vec<S
             j += 1;
         }
         let crossings = &xs[i..j];
-        debug_assert!(crossings.len() % 2 == 0);
+        debug_assert!(crossings.len().is_multiple_of(2));
         for pair in crossings.chunks_exact(2) {
             let s = first_centre_at_or_after(pair[0].1).clamp(0, w);
             let e = first_centre_at_or_after(pair[1].1).clamp(0, w);
@@ -424,7 +424,7 @@ mod tests {
         let sq = vec![[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]];
         let out = contour(Axis::Y, 4, 1, sq.clone());
         assert!(matches!(
-            contours_to_labels(&g, &[out.clone()]),
+            contours_to_labels(&g, std::slice::from_ref(&out)),
             Err(CoreError::SliceOutOfRange { index: 4, len: 4, .. })
         ));
         assert!(contours_to_mask(&g, &[out], 2).is_err());

@@ -315,7 +315,7 @@ impl AnyVolume {
                 if v
                     .data()
                     .par_iter()
-                    .any(|&x| !(x.is_finite() && x >= 0.0 && x <= 65535.0 && x.fract() == 0.0))
+                    .any(|&x| !(x.is_finite() && (0.0..=65535.0).contains(&x) && x.fract() == 0.0))
                 {
                     return Err(CoreError::Invalid(
                         "label volume has values that are not integers in 0..=65535".into(),
