@@ -30,6 +30,8 @@ enum Command {
     Evaluate(cmd::evaluate::Args),
     /// Generate synthetic cell-CT volumes with their exact label volumes.
     Phantom(cmd::phantom::Args),
+    /// Write the surface mesh of a label, or of a method's interpolation (STL, PLY, OBJ).
+    Mesh(cmd::mesh::Args),
 }
 
 fn main() {
@@ -42,6 +44,7 @@ fn main() {
         Command::Contours(a) => cmd::contours::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
         Command::Phantom(a) => cmd::phantom::run(a),
+        Command::Mesh(a) => cmd::mesh::run(a),
     };
     if let Err(e) = result {
         // One line: the chain of causes joined by ": ".

@@ -22,10 +22,6 @@ fn expected(name: &str) -> Value {
     json["cases"][name]["results"].clone()
 }
 
-fn run(args: &[&std::ffi::OsStr]) -> Output {
-    bin().args(args).output().expect("run interslice")
-}
-
 fn stdout_json(out: &Output) -> Value {
     assert!(
         out.status.success(),
@@ -58,20 +54,10 @@ fn close(got: &Value, want: &Value, rel: f64) -> bool {
 fn label_json_has_the_contract_keys_and_reference_values() {
     let name = "blob64_mm";
     let (gt, pred) = (case(name, "gt"), case(name, "pred"));
-    let out = run(&[
-        gt.as_os_str(),
-        pred.as_os_str(),
-        "--label".as_ref(),
-        "1".as_ref(),
-        "--json".as_ref(),
-    ]);
-    let out = {
-        let mut c = bin();
-        c.arg("evaluate").args([gt.as_os_str(), pred.as_os_str()]);
-        c.args(["--label", "1", "--json"]);
-        let _ = out;
-        c.output().unwrap()
-    };
+    let mut c = bin();
+    c.arg("evaluate").args([&gt, &pred]);
+    c.args(["--label", "1", "--json"]);
+    let out = c.output().unwrap();
     let j = stdout_json(&out);
     let r = expected(name);
     let (np, bd) = (&r["numpy_ref"], &r["ref_border6_kdtree"]);

@@ -13,6 +13,8 @@ pub fn methods() -> Vec<Box<dyn Interpolator>> {
         Box::new(crate::linear::Linear),
         Box::new(crate::aligned::ShapeAligned::default()),
     ];
+    // The four mesh-based methods of the original system.
+    all.extend(crate::mesh::mesh_methods());
     if let Some(p) = all.iter().position(|m| m.name() == DEFAULT_METHOD) {
         let d = all.remove(p);
         all.insert(0, d);

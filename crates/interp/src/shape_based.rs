@@ -29,9 +29,7 @@ pub fn drawn_sdfs(input: &SparseMask<'_>, plane: &Plane, extra: usize) -> Vec<Op
     let mut needed = vec![false; n];
     for g in 0..n - 1 {
         if d[g + 1] - d[g] > 1 {
-            for i in g.saturating_sub(extra)..=(g + 1 + extra).min(n - 1) {
-                needed[i] = true;
-            }
+            needed[g.saturating_sub(extra)..=(g + 1 + extra).min(n - 1)].fill(true);
         }
     }
     drawn_maps(input, plane, &needed)

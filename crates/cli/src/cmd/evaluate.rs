@@ -44,7 +44,12 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// NSD (surface Dice) tolerance, in the files' physical units.
-    #[arg(long, value_name = "T", default_value_t = DEFAULT_TOLERANCE)]
+    #[arg(
+        long,
+        value_name = "T",
+        default_value_t = DEFAULT_TOLERANCE,
+        allow_negative_numbers = true
+    )]
     pub tolerance: f64,
 }
 

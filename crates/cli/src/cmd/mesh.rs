@@ -1,0 +1,134 @@
+//! `interslice mesh LABELS --out FILE.stl|.ply|.obj [--label N] [--ascii]
+//! [--method M [--axis z|y|x] [--drawn FILE]]`
+//!
+//! Without `--method`: the closed marching-cubes surface of the label
+//! volume's voxels equal to `--label N` (every non-zero voxel without it),
+//! the iso-surface halfway between voxel centres.
+//!
+//! With `--method`: LABELS is a sparse label volume (as for `interpolate`)
+//! and the mesh is that method's: a mesh-based method (`marching-cubes`,
+//! `gaussian-splat`, `delaunay`, `unorganized-points`) writes the surface it
+//! builds from the drawn slices (before the drawn slices are restored in
+//! its voxel result); any other method writes the marching-cubes surface of
+//! its interpolated mask. Every label (or only `--label N`) is meshed on its
+//! own and the surfaces are written into one file.
+//!
+//! Coordinates are physical, in the volume's frame: voxel (0,0,0)'s centre
+//! at the origin, axes along the direction cosines, units those of the
+//! spacing. `.ply` is written binary unless `--ascii` is given.
+use anyhow::{Context, Result, bail};
+use interslice_core::mesh::TriMesh;
+use interslice_core::{Axis, LabelVolume, Mask};
+use interslice_interp::labels::traced_mask;
+use interslice_interp::mesh::{MESH_METHODS, mask_surface, surface};
+use interslice_interp::{SparseMask, by_name};
+use interslice_io::mesh::{MeshFormat, world_transform, write_mesh_as};
+use std::path::PathBuf;
+
+/// Arguments of `mesh`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The label volume (with --method: the sparse one whose drawn slices carry the tracings).
+    pub labels: PathBuf,
+    /// Output mesh: .stl (binary), .ply (binary, or ASCII with --ascii) or .obj.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Only this label (default: every non-zero voxel; with --method every label on its own).
+    #[arg(long)]
+    pub label: Option<u16>,
+    /// Mesh this method's interpolation of the sparse input (see `interpolate --list`).
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Axis the slices were drawn along (with --method).
+    #[arg(long, default_value = "z")]
+    pub axis: Axis,
+    /// File listing the drawn slice indices, one integer a line (with --method).
+    #[arg(long)]
+    pub drawn: Option<PathBuf>,
+    /// Write PLY as ASCII text instead of binary.
+    #[arg(long)]
+    pub ascii: bool,
+}
+
+/// Run `mesh`.
+pub fn run(a: Args) -> Result<()> {
+    let mut format = MeshFormat::of_path(&a.out)?;
+    if a.ascii {
+        if format != MeshFormat::PlyBinary {
+            bail!("--ascii applies to .ply output only");
+        }
+        format = MeshFormat::PlyAscii;
+    }
+    if a.method.is_none() && a.drawn.is_some() {
+        bail!("--drawn needs --method");
+    }
+    let labels = interslice_io::read_volume(&a.labels)
+        .with_context(|| format!("reading {}", a.labels.display()))?
+        .to_labels()
+        .with_context(|| format!("{} is not a label volume", a.labels.display()))?;
+    let mut mesh = match &a.method {
+        None => volume_surface(&labels, a.label, &a)?,
+        Some(name) => method_surface(&labels, name, &a)?,
+    };
+    let (m, t) = world_transform(labels.geometry());
+    mesh.transform(m, t);
+    write_mesh_as(&a.out, &mesh, format).with_context(|| format!("writing {}", a.out.display()))?;
+    Ok(())
+}
+
+/// The surface of the voxels equal to `label` (every non-zero voxel without one).
+fn volume_surface(labels: &LabelVolume, label: Option<u16>, a: &Args) -> Result<TriMesh> {
+    let mask: Mask = match label {
+        Some(l) => labels.map(|v| v == l),
+        None => labels.map(|v| v != 0),
+    };
+    if !mask.data().iter().any(|&v| v) {
+        match label {
+            Some(l) => bail!("label {l} does not occur in {}", a.labels.display()),
+            None => bail!("{} has no non-zero voxel", a.labels.display()),
+        }
+    }
+    Ok(mask_surface(&mask))
+}
+
+/// The mesh of method `name` for every label on the drawn slices (or `--label`).
+fn method_surface(labels: &LabelVolume, name: &str, a: &Args) -> Result<TriMesh> {
+    let method = by_name(name)?;
+    let drawn = super::interpolate::drawn_slices(labels, a.axis, a.drawn.as_deref())?;
+    let mut present = vec![false; 65536];
+    for &d in &drawn {
+        for v in labels.slice(a.axis, d)? {
+            present[usize::from(v)] = true;
+        }
+    }
+    let wanted: Vec<u16> = match a.label {
+        Some(l) if present[usize::from(l)] && l != 0 => vec![l],
+        Some(l) => bail!(
+            "label {l} does not occur on the drawn slices along {}",
+            a.axis
+        ),
+        None => (1..=u16::MAX)
+            .filter(|&l| present[usize::from(l)])
+            .collect(),
+    };
+    if wanted.is_empty() {
+        bail!("the drawn slices along {} hold no label", a.axis);
+    }
+    let mut out = TriMesh::new();
+    for l in wanted {
+        let traced = traced_mask(labels, a.axis, &drawn, l);
+        let input = SparseMask {
+            mask: &traced,
+            axis: a.axis,
+            drawn: &drawn,
+        };
+        let m = if MESH_METHODS.contains(&method.name()) {
+            surface(method.name(), input)
+        } else {
+            method.interpolate(input).map(|r| mask_surface(&r))
+        }
+        .with_context(|| format!("method {} on label {l}", method.name()))?;
+        out.append(&m);
+    }
+    Ok(out)
+}
