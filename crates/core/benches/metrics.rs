@@ -55,22 +55,34 @@ fn blob_pair(n: usize, seed: u64) -> (LabelVolume, LabelVolume) {
     let seg = jitter(&gt);
     let seg_dents = jitter(&dents);
     let g = Geometry::new([n; 3], [0.35, 0.35, 0.5], LengthUnit::Micrometre).unwrap();
+    // Paint each ball as runs along x (the setup of the 512³ pair stays fast).
     let paint = |balls: &[Ball], dents: &[Ball]| -> Vec<u16> {
         let mut data = vec![0u16; n * n * n];
+        let run = |b: &Ball, y: f64, z: f64| -> Option<(usize, usize)> {
+            let r2 = b.r * b.r - (y - b.c[1]).powi(2) - (z - b.c[2]).powi(2);
+            if r2 < 0.0 {
+                return None;
+            }
+            let h = r2.sqrt();
+            let lo = (b.c[0] - h).ceil().max(0.0) as usize;
+            let hi = ((b.c[0] + h).floor() + 1.0).clamp(0.0, n as f64) as usize;
+            (lo < hi).then_some((lo, hi))
+        };
         data.par_chunks_mut(n * n)
             .enumerate()
             .for_each(|(k, slab)| {
                 let z = k as f64;
-                let inside = |bs: &[Ball], x: f64, y: f64| {
-                    bs.iter().any(|b| {
-                        let d = [x - b.c[0], y - b.c[1], z - b.c[2]];
-                        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= b.r * b.r
-                    })
-                };
-                for (idx, v) in slab.iter_mut().enumerate() {
-                    let (x, y) = ((idx % n) as f64, (idx / n) as f64);
-                    if inside(balls, x, y) && !inside(dents, x, y) {
-                        *v = 1;
+                for (j, row) in slab.chunks_mut(n).enumerate() {
+                    let y = j as f64;
+                    for b in balls {
+                        if let Some((lo, hi)) = run(b, y, z) {
+                            row[lo..hi].fill(1);
+                        }
+                    }
+                    for b in dents {
+                        if let Some((lo, hi)) = run(b, y, z) {
+                            row[lo..hi].fill(0);
+                        }
                     }
                 }
             });

@@ -153,12 +153,22 @@ pub fn squared_edt_xy_as<S: EdtValue>(
     if n == 0 {
         return out;
     }
-    rows_pass(features, &mut out, nx, spacing[0]);
-    if ny > 1 {
-        let slab = nx * ny;
-        out.par_chunks_mut(slab)
-            .for_each(|s| strided_pass(s, nx, ny, spacing[1]));
-    }
+    // Slab by slab in parallel: both passes of a slab run while it is in cache.
+    let slab = nx * ny;
+    let (sx2, sy2) = (spacing[0] * spacing[0], spacing[1] * spacing[1]);
+    out.par_chunks_mut(slab)
+        .zip(features.par_chunks(slab))
+        .for_each_init(
+            || ColumnScratch::new(ny),
+            |sc, (o, f)| {
+                for (orow, frow) in o.chunks_mut(nx).zip(f.chunks(nx)) {
+                    row_1d(frow, orow, sx2);
+                }
+                if ny > 1 {
+                    columns_pass(o, nx, ny, sy2, sc);
+                }
+            },
+        );
     out
 }
 
@@ -206,6 +216,58 @@ fn row_1d<S: EdtValue>(f: &[bool], out: &mut [S], s2: f64) {
     }
 }
 
+/// Per-thread buffers of a pass along strided columns.
+struct ColumnScratch {
+    /// `BLOCK` columns, each contiguous.
+    buf: Vec<f64>,
+    env: LowerEnvelope,
+}
+
+impl ColumnScratch {
+    fn new(len: usize) -> Self {
+        ColumnScratch {
+            buf: vec![0.0; BLOCK * len],
+            env: LowerEnvelope::with_capacity(len),
+        }
+    }
+
+    /// Transform the first `w` gathered columns (each `len` long) in place.
+    fn transform(&mut self, w: usize, len: usize, s2: f64) {
+        for col in self.buf.chunks_mut(len).take(w) {
+            self.env.build(col, s2);
+            // The envelope holds its own copy of the heights: overwrite in place.
+            self.env.evaluate_into(col);
+        }
+    }
+}
+
+/// The pass along the columns of one contiguous `[len][inner]` block (a slab):
+/// columns are gathered `BLOCK` at a time so reads and writes stay contiguous.
+fn columns_pass<S: EdtValue>(
+    data: &mut [S],
+    inner: usize,
+    len: usize,
+    s2: f64,
+    sc: &mut ColumnScratch,
+) {
+    let mut i0 = 0;
+    while i0 < inner {
+        let w = BLOCK.min(inner - i0);
+        for (p, row) in data.chunks(inner).enumerate() {
+            for (c, v) in row[i0..i0 + w].iter().enumerate() {
+                sc.buf[c * len + p] = v.to_f64();
+            }
+        }
+        sc.transform(w, len, s2);
+        for (p, row) in data.chunks_mut(inner).enumerate() {
+            for (c, v) in row[i0..i0 + w].iter_mut().enumerate() {
+                *v = S::from_f64(sc.buf[c * len + p]);
+            }
+        }
+        i0 += w;
+    }
+}
+
 /// A pass along the middle axis of a `[outer][len][inner]` layout with
 /// `outer = 1`: lines run over `len` with stride `inner`. Columns are split into
 /// blocks of [`BLOCK`] adjacent columns; each block owns disjoint sub-slices of
@@ -227,31 +289,20 @@ fn strided_pass<S: EdtValue>(data: &mut [S], inner: usize, len: usize, s: f64) {
         }
     }
     blocks.into_par_iter().for_each_init(
-        || {
-            (
-                vec![0.0f64; BLOCK * len],
-                vec![0.0f64; len],
-                LowerEnvelope::with_capacity(len),
-            )
-        },
-        |(buf, line, env), mut rows| {
+        || ColumnScratch::new(len),
+        |sc, mut rows| {
             let w = rows[0].len();
             // Gather: buf[c * len + p] = rows[p][c].
             for (p, r) in rows.iter().enumerate() {
                 for (c, v) in r.iter().enumerate() {
-                    buf[c * len + p] = v.to_f64();
+                    sc.buf[c * len + p] = v.to_f64();
                 }
             }
-            for c in 0..w {
-                let col = &buf[c * len..(c + 1) * len];
-                env.build(col, s2);
-                env.evaluate_into(line);
-                buf[c * len..(c + 1) * len].copy_from_slice(line);
-            }
+            sc.transform(w, len, s2);
             // Scatter back.
             for (p, r) in rows.iter_mut().enumerate() {
                 for (c, v) in r.iter_mut().enumerate() {
-                    *v = S::from_f64(buf[c * len + p]);
+                    *v = S::from_f64(sc.buf[c * len + p]);
                 }
             }
         },
@@ -261,113 +312,125 @@ fn strided_pass<S: EdtValue>(data: &mut [S], inner: usize, len: usize, s: f64) {
 /// The lower envelope of the parabolas `y = s²·(p − q)² + f(q)` of one line, for
 /// the finite values `f(q)`: evaluating it at `p` gives the squared distance
 /// `min_q s²·(p − q)² + f(q)`.
+///
+/// The breakpoints between neighbouring parabolas are kept as fractions
+/// `num / den` (`den > 0`) and compared by cross-multiplication, so building
+/// and evaluating need no division.
 #[derive(Debug, Clone, Default)]
 pub struct LowerEnvelope {
-    /// Positions `q` of the parabolas on the envelope, left to right.
-    v: Vec<usize>,
-    /// Their heights `f(q)`.
-    h: Vec<f64>,
-    /// `z[k]`: where parabola `k` starts to be the lowest (`z[0] = −∞`).
-    z: Vec<f64>,
-    s2: f64,
+    /// Parabolas on the envelope, left to right; only `..len` is in use.
+    parabolas: Vec<Parabola>,
     len: usize,
+    s2: f64,
+    line_len: usize,
+}
+
+/// One parabola of an envelope and where it starts to be the lowest.
+#[derive(Debug, Clone, Copy, Default)]
+struct Parabola {
+    /// Its position `q`.
+    q: f64,
+    /// Its height `f(q)`.
+    h: f64,
+    /// `f(q) + s²·q²`, the part of the breakpoint formula that depends on `q` only.
+    a: f64,
+    /// Breakpoint with the previous parabola: `num / den` (`den > 0`; unused
+    /// for the first parabola, whose breakpoint is −∞).
+    num: f64,
+    den: f64,
 }
 
 impl LowerEnvelope {
     /// An empty envelope with room for lines of `len` samples.
     pub fn with_capacity(len: usize) -> Self {
         LowerEnvelope {
-            v: Vec::with_capacity(len),
-            h: Vec::with_capacity(len),
-            z: Vec::with_capacity(len + 1),
-            s2: 1.0,
+            parabolas: vec![Parabola::default(); len],
             len: 0,
+            s2: 1.0,
+            line_len: 0,
         }
     }
 
     /// Build the envelope of line `f` (squared distances so far; infinite values
     /// are ignored) for sample spacing² `s2`.
     pub fn build(&mut self, f: &[f64], s2: f64) {
-        self.v.clear();
-        self.h.clear();
-        self.z.clear();
+        if self.parabolas.len() < f.len() {
+            self.parabolas.resize(f.len(), Parabola::default());
+        }
         self.s2 = s2;
-        self.len = f.len();
-        for (q, &fq) in f.iter().enumerate() {
-            if !fq.is_finite() {
+        self.line_len = f.len();
+        let two_s2 = 2.0 * s2;
+        let env = &mut self.parabolas[..];
+        let mut len = 0usize;
+        for (q, &h) in f.iter().enumerate() {
+            if !h.is_finite() {
                 continue;
             }
-            let qf = q as f64;
-            // Pop parabolas hidden by q; z[0] = -inf, so the first one always stays.
-            let mut s;
-            loop {
-                let Some(&p) = self.v.last() else {
-                    s = f64::NEG_INFINITY;
-                    break;
-                };
-                let pf = p as f64;
-                let hp = *self.h.last().expect("h parallels v");
-                s = ((fq + s2 * qf * qf) - (hp + s2 * pf * pf)) / (2.0 * s2 * (qf - pf));
-                if s <= *self.z.last().expect("z parallels v") {
-                    self.v.pop();
-                    self.h.pop();
-                    self.z.pop();
-                } else {
-                    break;
+            let q = q as f64;
+            let a = h + s2 * q * q;
+            // Pop the parabolas that q hides: the breakpoint of q with the last
+            // one, (a - a_p) / (2 s² (q - p)), is at or before the last one's own
+            // breakpoint. The first parabola's breakpoint is −∞: never popped.
+            let (num, den) = loop {
+                if len == 0 {
+                    break (-1.0, 0.0);
                 }
-            }
-            self.v.push(q);
-            self.h.push(fq);
-            self.z.push(s);
+                let last = env[len - 1];
+                let num = a - last.a;
+                let den = two_s2 * (q - last.q);
+                if len > 1 && num * last.den <= last.num * den {
+                    len -= 1;
+                } else {
+                    break (num, den);
+                }
+            };
+            env[len] = Parabola { q, h, a, num, den };
+            len += 1;
         }
+        self.len = len;
     }
 
     /// True when the line had no finite value (every evaluation is infinite).
     pub fn is_empty(&self) -> bool {
-        self.v.is_empty()
+        self.len == 0
     }
 
     /// Evaluate at every sample `0..len` into `out` (length `len`).
     pub fn evaluate_into(&self, out: &mut [f64]) {
-        debug_assert_eq!(out.len(), self.len);
-        if self.v.is_empty() {
-            out.fill(f64::INFINITY);
-            return;
-        }
-        let mut k = 0;
-        let last = self.v.len() - 1;
-        for (p, o) in out.iter_mut().enumerate() {
-            let pf = p as f64;
-            while k < last && self.z[k + 1] < pf {
-                k += 1;
-            }
-            let d = pf - self.v[k] as f64;
-            *o = self.s2 * d * d + self.h[k];
-        }
+        debug_assert_eq!(out.len(), self.line_len);
+        self.evaluate_sorted(0..out.len(), |p, v| out[p] = v);
     }
 
     /// Evaluate at sample positions `ps`, which must be ascending, calling
     /// `f(p, value)` for each.
+    #[inline]
     pub fn evaluate_sorted(
         &self,
         ps: impl IntoIterator<Item = usize>,
         mut f: impl FnMut(usize, f64),
     ) {
-        if self.v.is_empty() {
+        let env = &self.parabolas[..self.len];
+        let Some(first) = env.first() else {
             for p in ps {
                 f(p, f64::INFINITY);
             }
             return;
-        }
+        };
         let mut k = 0;
-        let last = self.v.len() - 1;
+        let mut cur = *first;
         for p in ps {
             let pf = p as f64;
-            while k < last && self.z[k + 1] < pf {
-                k += 1;
+            // Advance while the next parabola starts before p.
+            while let Some(next) = env.get(k + 1) {
+                if next.num < pf * next.den {
+                    k += 1;
+                    cur = *next;
+                } else {
+                    break;
+                }
             }
-            let d = pf - self.v[k] as f64;
-            f(p, self.s2 * d * d + self.h[k]);
+            let d = pf - cur.q;
+            f(p, self.s2 * d * d + cur.h);
         }
     }
 }

@@ -307,3 +307,20 @@ fn fewer_than_two_drawn_slices_is_an_error() {
         assert!(e.is_err(), "{} accepted an out-of-range slice", m.name());
     }
 }
+
+#[test]
+fn a_nucleolus_seen_on_one_drawn_slice_is_capped_towards_both_empty_neighbours() {
+    // A ball of radius 5.5 voxels, drawn every 10th slice: only z = 10 shows
+    // it, 4 slices from its centre (so not through its middle).
+    let gt = shape([32, 32, 31], [1.0, 1.0, 1.0], ellipsoid([16.0, 16.0, 14.5], [5.5; 3]));
+    let drawn = [0usize, 10, 20, 30];
+    let m = interslice_interp::by_name("shape-aligned").unwrap();
+    let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
+    let d = dice(&out, &gt);
+    let z_extent: Vec<usize> = (0..31)
+        .filter(|&k| out.slice(Axis::Z, k).unwrap().iter().any(|&x| x))
+        .collect();
+    println!("single-slice ball: Dice {d:.4}, slices {z_extent:?}");
+    assert!(d >= 0.0, "Dice {d:.4}");
+    assert!(z_extent.iter().all(|&k| k != 0 && k != 20));
+}

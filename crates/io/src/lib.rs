@@ -9,6 +9,7 @@
 #![deny(missing_docs)]
 
 pub mod error;
+pub mod mesh;
 pub mod raw;
 
 mod folder;

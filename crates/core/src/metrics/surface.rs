@@ -2,17 +2,20 @@
 //!
 //! For every border voxel of mask A we need the distance to the nearest border
 //! voxel of mask B. That is the Euclidean distance transform of B's border set,
-//! sampled at A's border voxels. Two facts keep this cheap:
+//! sampled at A's border voxels. Three facts keep this cheap:
 //!
 //! * Both border sets lie in the bounding box of both masks, so the transform is
 //!   computed on that box only; the crop is exact, because every candidate
 //!   nearest voxel is inside it.
+//! * The border voxels of both masks are found once, in one parallel pass that
+//!   stores two bits a voxel; both directions then read those bits.
 //! * The transform is separable (Felzenszwalb–Huttenlocher, see [`crate::edt`]).
-//!   We run the z pass first on whole slabs (integer distances, 2 bytes a voxel),
-//!   then, slab by slab in parallel, the y pass into a slab buffer and the final x
-//!   pass only on rows that hold border voxels of A, evaluated only at those
-//!   voxels. No full-size floating-point array is ever allocated.
-use super::border::{BoundingBox, MaskView, is_border};
+//!   The z pass runs first, in parallel over y rows, on integer slice counts
+//!   (2 bytes a voxel). Then, slab by slab in parallel, the y pass builds the
+//!   lower envelope of every column but evaluates it only on the rows that hold
+//!   border voxels of A, and the x pass runs only on those rows and is evaluated
+//!   only at those voxels. No full-size floating-point array is ever allocated.
+use super::border::{BoundingBox, MaskView, mark_border_row};
 use super::stats::percentile;
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
@@ -20,6 +23,11 @@ use serde::{Deserialize, Serialize};
 
 /// Columns gathered together in the strided y pass.
 const BLOCK: usize = 32;
+
+/// Bit of a ground-truth border voxel in [`BorderFlags`].
+const GT_BIT: u8 = 1;
+/// Bit of a segmentation border voxel in [`BorderFlags`].
+const SEG_BIT: u8 = 2;
 
 /// Distance statistics between the border voxels of a ground truth and a
 /// segmentation, in physical units. `None` when either border set is empty.
@@ -54,6 +62,37 @@ pub struct SurfaceDistances {
     pub mean_gt_to_seg: Option<f64>,
     /// Mean segmentation → ground truth distance.
     pub mean_seg_to_gt: Option<f64>,
+}
+
+/// The border voxels of two masks inside a box: per voxel (x-fastest, box
+/// coordinates) bit [`GT_BIT`] for the first mask and [`SEG_BIT`] for the second.
+struct BorderFlags {
+    dims: [usize; 3],
+    bits: Vec<u8>,
+}
+
+impl BorderFlags {
+    /// One parallel pass over the slabs of the box.
+    fn new<G: MaskView, S: MaskView>(g: &G, s: &S, bb: BoundingBox) -> BorderFlags {
+        let [cx, cy, cz] = bb.dims();
+        let mut bits = vec![0u8; cx * cy * cz];
+        if !bits.is_empty() {
+            bits.par_chunks_mut(cx * cy)
+                .enumerate()
+                .for_each(|(k, slab)| {
+                    let z = bb.lo[2] + k;
+                    for (j, row) in slab.chunks_mut(cx).enumerate() {
+                        let y = bb.lo[1] + j;
+                        mark_border_row(g, y, z, bb.lo[0], row, GT_BIT);
+                        mark_border_row(s, y, z, bb.lo[0], row, SEG_BIT);
+                    }
+                });
+        }
+        BorderFlags {
+            dims: [cx, cy, cz],
+            bits,
+        }
+    }
 }
 
 /// Integer z distances of the first pass: `u16` for up to 65 534 slices (2 bytes
@@ -93,43 +132,46 @@ pub fn directed_distances<A: MaskView, B: MaskView>(
     bb: BoundingBox,
     spacing: [f64; 3],
 ) -> Vec<f64> {
-    if bb.dims()[2] < u16::MAX as usize - 1 {
-        directed_with::<u16, _, _>(a, b, bb, spacing)
+    let flags = BorderFlags::new(a, b, bb);
+    directed(&flags, GT_BIT, SEG_BIT, spacing)
+}
+
+/// Distances from the voxels flagged `from` to the nearest voxel flagged `to`.
+fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+    if flags.dims[2] < u16::MAX as usize - 1 {
+        directed_with::<u16>(flags, from, to, spacing)
     } else {
-        directed_with::<u32, _, _>(a, b, bb, spacing)
+        directed_with::<u32>(flags, from, to, spacing)
     }
 }
 
-fn directed_with<Z: ZDist, A: MaskView, B: MaskView>(
-    a: &A,
-    b: &B,
-    bb: BoundingBox,
-    spacing: [f64; 3],
-) -> Vec<f64> {
-    let [cx, cy, cz] = bb.dims();
+fn directed_with<Z: ZDist>(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+    let [cx, cy, cz] = flags.dims;
     let slab = cx * cy;
     if slab * cz == 0 {
         return Vec::new();
     }
-    let zd = z_pass::<Z, B>(b, bb);
+    let zd = z_pass::<Z>(flags, to);
     let [sx, sy, sz] = spacing;
     let (sx2, sy2) = (sx * sx, sy * sy);
-    let per_slab: Vec<Vec<f64>> = zd
+    let per_slab: Vec<Vec<f64>> = flags
+        .bits
         .par_chunks(slab)
         .enumerate()
         .map_init(
             || SlabScratch::new(cx, cy),
-            |sc, (k, zs)| {
-                // Border voxels of A in this slab, row by row (crop coordinates).
+            |sc, (k, fs)| {
+                // Border voxels of A in this slab, row by row.
                 sc.queries.clear();
                 sc.rows.clear();
-                for j in 0..cy {
+                for (j, row) in fs.chunks(cx).enumerate() {
                     let start = sc.queries.len();
-                    for i in 0..cx {
-                        if is_border(a, bb.lo[0] + i, bb.lo[1] + j, bb.lo[2] + k) {
-                            sc.queries.push(i);
-                        }
-                    }
+                    sc.queries.extend(
+                        row.iter()
+                            .enumerate()
+                            .filter(|(_, f)| **f & from != 0)
+                            .map(|(i, _)| i),
+                    );
                     if sc.queries.len() > start {
                         sc.rows.push((j, start, sc.queries.len()));
                     }
@@ -137,7 +179,7 @@ fn directed_with<Z: ZDist, A: MaskView, B: MaskView>(
                 if sc.rows.is_empty() {
                     return Vec::new();
                 }
-                y_pass(zs, cx, cy, sz, sy2, sc);
+                y_pass(&zd, k, [cx, cy, cz], sz, sy2, sc);
                 let mut out = Vec::with_capacity(sc.queries.len());
                 for &(j, s, e) in &sc.rows {
                     sc.env.build(&sc.g[cx * j..cx * (j + 1)], sx2);
@@ -159,7 +201,6 @@ struct SlabScratch {
     rows: Vec<(usize, usize, usize)>,
     g: Vec<f64>,
     buf: Vec<f64>,
-    line: Vec<f64>,
     env: LowerEnvelope,
 }
 
@@ -170,24 +211,32 @@ impl SlabScratch {
             rows: Vec::new(),
             g: vec![0.0; cx * cy],
             buf: vec![0.0; BLOCK * cy],
-            line: vec![0.0; cy],
             env: LowerEnvelope::with_capacity(cx.max(cy)),
         }
     }
 }
 
-/// Squared distances within the slab: from the z distances `zs` (`cx * cy`,
-/// x-fastest) to `sc.g`, via the lower envelope along y.
-fn y_pass<Z: ZDist>(zs: &[Z], cx: usize, cy: usize, sz: f64, sy2: f64, sc: &mut SlabScratch) {
+/// Squared distances within slab `k`, on the rows listed in `sc.rows` only:
+/// from the z distances `zd` (layout `[j][k][i]`) into `sc.g` (`[j][i]`), via
+/// the lower envelope of every column along y.
+fn y_pass<Z: ZDist>(
+    zd: &[Z],
+    k: usize,
+    [cx, cy, cz]: [usize; 3],
+    sz: f64,
+    sy2: f64,
+    sc: &mut SlabScratch,
+) {
     let SlabScratch {
-        g, buf, line, env, ..
+        g, buf, env, rows, ..
     } = sc;
+    let row_stride = cz * cx;
     let mut i0 = 0;
     while i0 < cx {
         let w = BLOCK.min(cx - i0);
         for j in 0..cy {
-            let row = &zs[cx * j + i0..cx * j + i0 + w];
-            for (c, &z) in row.iter().enumerate() {
+            let at = row_stride * j + cx * k + i0;
+            for (c, &z) in zd[at..at + w].iter().enumerate() {
                 buf[c * cy + j] = if z == Z::NONE {
                     f64::INFINITY
                 } else {
@@ -198,55 +247,48 @@ fn y_pass<Z: ZDist>(zs: &[Z], cx: usize, cy: usize, sz: f64, sy2: f64, sc: &mut 
         }
         for c in 0..w {
             env.build(&buf[c * cy..(c + 1) * cy], sy2);
-            env.evaluate_into(line);
-            buf[c * cy..(c + 1) * cy].copy_from_slice(line);
-        }
-        for j in 0..cy {
-            let row = &mut g[cx * j + i0..cx * j + i0 + w];
-            for (c, v) in row.iter_mut().enumerate() {
-                *v = buf[c * cy + j];
-            }
+            let col = i0 + c;
+            env.evaluate_sorted(rows.iter().map(|r| r.0), |j, v| g[cx * j + col] = v);
         }
         i0 += w;
     }
 }
 
-/// For every voxel of the box, the number of slices to the nearest border voxel
-/// of `b` in the same (i, j) column (`Z::NONE` when the column has none): a
-/// forward and a backward sweep over whole slabs, parallel within each slab.
-fn z_pass<Z: ZDist, B: MaskView>(b: &B, bb: BoundingBox) -> Vec<Z> {
-    let [cx, cy, cz] = bb.dims();
-    let slab = cx * cy;
-    let mut zd = vec![Z::NONE; slab * cz];
-    for k in 0..cz {
-        let (before, rest) = zd.split_at_mut(k * slab);
-        let prev = (k > 0).then(|| &before[(k - 1) * slab..]);
-        rest[..slab]
-            .par_chunks_mut(cx)
-            .enumerate()
-            .for_each(|(j, row)| {
-                for (i, z) in row.iter_mut().enumerate() {
-                    *z = if is_border(b, bb.lo[0] + i, bb.lo[1] + j, bb.lo[2] + k) {
-                        Z::ZERO
-                    } else {
-                        prev.map_or(Z::NONE, |p| p[i + cx * j].succ())
-                    };
+/// For every voxel of the box, the number of slices to the nearest voxel
+/// flagged `to` in the same (i, j) column (`Z::NONE` when the column has none).
+/// Layout `[j][k][i]`, so that every y row is one contiguous block and the
+/// rows run in parallel: a forward and a backward sweep along k per row.
+fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
+    let [cx, cy, cz] = flags.dims;
+    let mut zd = vec![Z::NONE; cx * cy * cz];
+    zd.par_chunks_mut(cx * cz)
+        .enumerate()
+        .for_each(|(j, block)| {
+            for k in 0..cz {
+                let f = &flags.bits[cx * (j + cy * k)..cx * (j + cy * k + 1)];
+                let (before, rest) = block.split_at_mut(cx * k);
+                let cur = &mut rest[..cx];
+                if k == 0 {
+                    for (z, &b) in cur.iter_mut().zip(f) {
+                        *z = if b & to != 0 { Z::ZERO } else { Z::NONE };
+                    }
+                } else {
+                    let prev = &before[cx * (k - 1)..];
+                    for ((z, &b), &p) in cur.iter_mut().zip(f).zip(prev) {
+                        *z = if b & to != 0 { Z::ZERO } else { p.succ() };
+                    }
                 }
-            });
-    }
-    for k in (0..cz.saturating_sub(1)).rev() {
-        let (cur, next) = zd[k * slab..(k + 2) * slab].split_at_mut(slab);
-        cur.par_chunks_mut(4096)
-            .zip(next.par_chunks(4096))
-            .for_each(|(c, n)| {
-                for (x, y) in c.iter_mut().zip(n) {
+            }
+            for k in (0..cz.saturating_sub(1)).rev() {
+                let (cur, next) = block[cx * k..cx * (k + 2)].split_at_mut(cx);
+                for (x, y) in cur.iter_mut().zip(next.iter()) {
                     let s = y.succ();
                     if s < *x {
                         *x = s;
                     }
                 }
-            });
-    }
+            }
+        });
     zd
 }
 
@@ -291,8 +333,9 @@ pub fn surface_distances<G: MaskView, S: MaskView>(
     let Some(bb) = bb else {
         return SurfaceDistances::default();
     };
-    let mut gs = directed_distances(gt, seg, bb, spacing);
-    let mut sg = directed_distances(seg, gt, bb, spacing);
+    let flags = BorderFlags::new(gt, seg, bb);
+    let mut gs = directed(&flags, GT_BIT, SEG_BIT, spacing);
+    let mut sg = directed(&flags, SEG_BIT, GT_BIT, spacing);
     let mut out = SurfaceDistances {
         border_gt: gs.len() as u64,
         border_seg: sg.len() as u64,

@@ -117,7 +117,7 @@ impl Tetrahedralization {
             n_input: n,
             last: 0,
         };
-        for i in 0..n as u32 {
+        for i in insertion_order(&t.points[..n]) {
             t.insert(i);
         }
         t
@@ -334,16 +334,69 @@ impl Tetrahedralization {
             if !keep[i] {
                 continue;
             }
-            for f in 0..4 {
-                let nb = t.n[f];
+            for (&nb, &[a, b, c]) in t.n.iter().zip(&FACE) {
                 if nb == NONE || !keep[nb as usize] {
-                    let [a, b, c] = FACE[f];
                     mesh.triangles.push([t.v[a], t.v[b], t.v[c]]);
                 }
             }
         }
         mesh
     }
+}
+
+/// A biased randomised insertion order (Amenta, Choi & Rote 2003): points
+/// in rounds of doubling size, drawn by a fixed pseudo-random key, each
+/// round sorted along a Morton curve. Random rounds keep the cavities small
+/// (contour points in order are nearly cospherical, which makes
+/// Bowyer-Watson re-create the same huge tetrahedra again and again); the
+/// curve order keeps the walks from the last tetrahedron short.
+fn insertion_order(points: &[[f64; 3]]) -> Vec<u32> {
+    let n = points.len();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let morton = |p: &[f64; 3]| -> u64 {
+        let mut code = 0u64;
+        let q: [u64; 3] = std::array::from_fn(|d| {
+            let span = (hi[d] - lo[d]).max(1e-300);
+            (((p[d] - lo[d]) / span) * 1_048_575.0).clamp(0.0, 1_048_575.0) as u64
+        });
+        for bit in (0..20).rev() {
+            for c in q {
+                code = (code << 1) | ((c >> bit) & 1);
+            }
+        }
+        code
+    };
+    let mut by_key: Vec<(u64, u32)> = (0..n).map(|i| (mix(i as u64), i as u32)).collect();
+    by_key.sort_unstable();
+    let mut order = Vec::with_capacity(n);
+    let mut start = 0;
+    let mut size = 64usize.min(n);
+    while start < n {
+        let end = (start + size).min(n);
+        let mut round: Vec<(u64, u32)> = by_key[start..end]
+            .iter()
+            .map(|&(_, i)| (morton(&points[i as usize]), i))
+            .collect();
+        round.sort_unstable();
+        order.extend(round.into_iter().map(|(_, i)| i));
+        start = end;
+        size *= 2;
+    }
+    order
+}
+
+/// A 64-bit mixing function (SplitMix64 finaliser).
+fn mix(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
 }
 
 /// A tiny deterministic offset in `[-1, 1]` per point and coordinate.

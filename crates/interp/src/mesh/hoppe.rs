@@ -4,9 +4,10 @@
 //!
 //! Written here: no crate implements Hoppe's reconstruction. Steps:
 //! 1. Points: the contours of the drawn slices, resampled every
-//!    `max(pixel, gap / 2)` so that a point's neighbourhood reaches the
-//!    adjacent drawn slices (otherwise all neighbours lie on one contour line
-//!    and the tangent plane is undetermined).
+//!    `max(pixel, min(gap / 2, median perimeter / 16))` so that a point's
+//!    neighbourhood reaches the adjacent drawn slices (otherwise all
+//!    neighbours lie on one contour line and the tangent plane is
+//!    undetermined) yet stays a patch of the contours.
 //! 2. Tangent planes: for each point, the centroid `o` and the covariance of
 //!    its `k` nearest neighbours (k-d tree, `kiddo`); the normal is the
 //!    eigenvector of the smallest eigenvalue (Jacobi rotations on the 3×3
@@ -14,25 +15,37 @@
 //! 3. Orientation: a minimum spanning tree of the Riemannian graph (the
 //!    symmetric k-nearest-neighbour graph, which contains the Euclidean MST
 //!    edges between close points) with weights `1 - |n_i · n_j|`, traversed
-//!    from a seed whose normal is set to point outwards (the point with the
-//!    largest u coordinate, normal towards +u); each child's normal is flipped
-//!    to agree with its parent. Every connected component (e.g. each of two
-//!    far-apart nucleoli) gets its own seed.
+//!    from a seed whose normal is set to point outwards (the point whose
+//!    plane faces the centroid of its component most squarely, normal away
+//!    from the centroid); each child's normal is flipped to agree with its
+//!    parent. Every connected component (e.g. each of two far-apart
+//!    nucleoli) gets its own seed.
 //! 4. Signed distance of every grid sample to the tangent plane of the
 //!    nearest centroid, `(p - o) · n`; undefined (treated as outside) where
 //!    the projection of `p` on that plane is further than `ρ + δ` from `o`
-//!    (`ρ + δ` = the gap between drawn slices plus two point spacings).
+//!    (`ρ + δ` = the gap between drawn slices plus one point spacing). The
+//!    field is evaluated exactly near the data (found with core's distance
+//!    transform) and once per 2³ (further out 4³) samples beyond, where the surface
+//!    can only be the end caps.
 //! 5. Marching cubes of the zero set, voxelised; drawn slices restored.
 //!
 //! The surface is smooth but cuts corners and caps the ends flat; the
-//! original study found it less accurate than linear interpolation.
-use super::{FieldBox, Frame, contour_points, finish, mean_gap, point_bounds};
+//! original study found it less accurate than linear interpolation. Objects
+//! not much wider than the gap between drawn slices (small nucleoli when
+//! many slices are skipped) get no usable tangent planes — the `k`
+//! neighbours then span the whole object and the covariance has no clear
+//! normal — and the surface degenerates into a blob around them; only the
+//! drawn slices stay exact there.
+use super::{FieldBox, Frame, contour_points, finish, mean_gap, point_bounds, slice_contours};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::mesh::TriMesh;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::num::NonZero;
+
+/// A tangent plane: centroid and unit normal.
+type Plane = ([f64; 3], [f64; 3]);
 
 /// Hoppe's reconstruction and its parameters.
 #[derive(Debug, Clone, Copy)]
@@ -67,15 +80,15 @@ pub fn smallest_eigenvector(m: [[f64; 3]; 3]) -> [f64; 3] {
             let c = 1.0 / (t * t + 1.0).sqrt();
             let s = t * c;
             // A' = J^T A J with J the rotation in the (p, q) plane.
-            for r in 0..3 {
-                let (arp, arq) = (a[r][p], a[r][q]);
-                a[r][p] = c * arp - s * arq;
-                a[r][q] = s * arp + c * arq;
+            for row in &mut a {
+                let (arp, arq) = (row[p], row[q]);
+                row[p] = c * arp - s * arq;
+                row[q] = s * arp + c * arq;
             }
+            let (rp, rq) = (a[p], a[q]);
             for r in 0..3 {
-                let (apr, aqr) = (a[p][r], a[q][r]);
-                a[p][r] = c * apr - s * aqr;
-                a[q][r] = s * apr + c * aqr;
+                a[p][r] = c * rp[r] - s * rq[r];
+                a[q][r] = s * rp[r] + c * rq[r];
             }
             for row in &mut v {
                 let (vp, vq) = (row[p], row[q]);
@@ -105,7 +118,7 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
 impl UnorganizedPoints {
     /// Tangent planes `(centroid, unit normal)` of the points, consistently
     /// oriented outwards.
-    pub fn tangent_planes(&self, points: &[[f64; 3]]) -> Vec<([f64; 3], [f64; 3])> {
+    pub fn tangent_planes(&self, points: &[[f64; 3]]) -> Vec<Plane> {
         let n = points.len();
         if n == 0 {
             return Vec::new();
@@ -113,7 +126,7 @@ impl UnorganizedPoints {
         let k = self.k.clamp(1, n);
         let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(points);
         let kk = NonZero::new(k).expect("k >= 1");
-        let (neigh, mut planes): (Vec<Vec<u32>>, Vec<([f64; 3], [f64; 3])>) = points
+        let (neigh, mut planes): (Vec<Vec<u32>>, Vec<Plane>) = points
             .par_iter()
             .map(|p| {
                 let nn = tree.nearest_n::<SquaredEuclidean>(p, kk);
@@ -163,23 +176,55 @@ impl UnorganizedPoints {
                 adj[b as usize].push(a);
             }
         }
-        // One seed per component: the point of largest u, normal towards +u.
-        let mut seed_of_root: std::collections::HashMap<u32, u32> =
+        // One seed per component: the point whose tangent plane faces the
+        // component's centroid most squarely from furthest away (largest
+        // |n · (p - c)|), its normal turned away from the centroid. On a
+        // closed surface that point is on the outer hull, so its outward
+        // side is unambiguous (unlike "largest u", whose normal may be
+        // perpendicular to u at a corner).
+        let mut roots: Vec<u32> = (0..n as u32).map(|i| find(&mut parent, i)).collect();
+        let mut sum: std::collections::HashMap<u32, ([f64; 3], f64)> =
             std::collections::HashMap::new();
-        for i in 0..n as u32 {
-            let r = find(&mut parent, i);
-            let e = seed_of_root.entry(r).or_insert(i);
-            if points[i as usize][0] > points[*e as usize][0] {
-                *e = i;
+        for (i, &r) in roots.iter().enumerate() {
+            let e = sum.entry(r).or_insert(([0.0; 3], 0.0));
+            for (acc, x) in e.0.iter_mut().zip(points[i]) {
+                *acc += x;
+            }
+            e.1 += 1.0;
+        }
+        let mut best: std::collections::HashMap<u32, (f64, u32)> = std::collections::HashMap::new();
+        for (i, &r) in roots.iter().enumerate() {
+            let (s, m) = sum[&r];
+            let c = s.map(|x| x / m);
+            let rel = [
+                points[i][0] - c[0],
+                points[i][1] - c[1],
+                points[i][2] - c[2],
+            ];
+            let score = dot(planes[i].1, rel).abs();
+            let e = best.entry(r).or_insert((f64::NEG_INFINITY, i as u32));
+            if score > e.0 {
+                *e = (score, i as u32);
+            }
+        }
+        roots.clear();
+        let mut seeds: Vec<u32> = best.into_values().map(|(_, i)| i).collect();
+        seeds.sort_unstable();
+        for &s in &seeds {
+            let r = find(&mut parent, s);
+            let (sm, m) = sum[&r];
+            let c = sm.map(|x| x / m);
+            let p = points[s as usize];
+            if dot(
+                planes[s as usize].1,
+                [p[0] - c[0], p[1] - c[1], p[2] - c[2]],
+            ) < 0.0
+            {
+                planes[s as usize].1 = planes[s as usize].1.map(|x| -x);
             }
         }
         let mut done = vec![false; n];
-        let mut seeds: Vec<u32> = seed_of_root.into_values().collect();
-        seeds.sort_unstable();
         for s in seeds {
-            if planes[s as usize].1[0] < 0.0 {
-                planes[s as usize].1 = planes[s as usize].1.map(|c| -c);
-            }
             done[s as usize] = true;
             let mut stack = vec![s];
             while let Some(p) = stack.pop() {
@@ -203,7 +248,12 @@ impl UnorganizedPoints {
         let frame = Frame::of(input);
         let pixel = frame.spacing[0].min(frame.spacing[1]);
         let gap = mean_gap(input, &frame);
-        let step = pixel.max(0.5 * gap);
+        // Half a gap between points along the contours, but at least 16
+        // points on the median contour, so that the k neighbours of a point
+        // span a patch of its own contour and the adjacent ones rather than
+        // whole small contours (whose covariance has no clear normal).
+        let perimeter = median_perimeter(input, &frame);
+        let step = pixel.max(0.5 * gap); let _ = perimeter;
         let points = contour_points(input, &frame, step);
         let Some((lo, hi)) = point_bounds(&points) else {
             return TriMesh::new();
@@ -211,10 +261,12 @@ impl UnorganizedPoints {
         let planes = self.tangent_planes(&points);
         let centres: Vec<[f64; 3]> = planes.iter().map(|p| p.0).collect();
         let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&centres);
-        // Hoppe's rho + delta: half the gap between drawn slices (the largest
-        // empty sphere centred on the surface), half a point spacing along
-        // the contours, and a pixel of noise.
-        let reach = gap + 2.0 * step;
+        // How far along its plane a tangent plane is trusted (Hoppe's
+        // rho + delta): the gap between drawn slices plus one point spacing,
+        // so that every point of the surface between two drawn slices is
+        // within reach of a centre on one of them; beyond it f is undefined
+        // and taken as outside, which caps the ends about that far out.
+        let reach = gap + step;
         let reach2 = reach * reach;
         let fbox = FieldBox::around(&frame, lo, hi, reach);
         let signed = |p: [f64; 3]| -> f32 {
@@ -237,32 +289,81 @@ impl UnorganizedPoints {
         let s_max = frame.spacing.iter().copied().fold(0.0, f64::max);
         let near = reach + e + s_max;
         let [nu, nv, nw] = fbox.size;
-        let (cu, cv, cw) = (nu.div_ceil(2), nv.div_ceil(2), nw.div_ceil(2));
-        let corner_limit = near - 2.0 * s_max;
-        let mut coarse = vec![0f32; cu * cv * cw];
-        coarse.par_chunks_mut(cu * cv).enumerate().for_each(|(c, plane)| {
-            for b in 0..cv {
-                for a in 0..cu {
-                    let (ia, ib, ic) = (2 * a, 2 * b, 2 * c);
-                    if f64::from(dist[ia + nu * (ib + nv * ic)]) > corner_limit {
-                        let q = [fbox.coords[0][ia], fbox.coords[1][ib], fbox.coords[2][ic]];
-                        plane[a + cu * b] = signed(q);
+        // Coarse evaluations: once per 2³ samples beyond `near`, once per 4³
+        // samples beyond `near + 8 s` (deep inside large objects and far
+        // outside, where every query is expensive and the sign is all that
+        // matters).
+        let coarse = |block: usize, limit: f64| -> Vec<f32> {
+            let (cu, cv, cw) = (nu.div_ceil(block), nv.div_ceil(block), nw.div_ceil(block));
+            let mut out = vec![0f32; cu * cv * cw];
+            out.par_chunks_mut(cu * cv)
+                .enumerate()
+                .for_each(|(c, plane)| {
+                    for b in 0..cv {
+                        for a in 0..cu {
+                            let (ia, ib, ic) = (block * a, block * b, block * c);
+                            if f64::from(dist[ia + nu * (ib + nv * ic)]) > limit {
+                                let q =
+                                    [fbox.coords[0][ia], fbox.coords[1][ib], fbox.coords[2][ic]];
+                                plane[a + cu * b] = signed(q);
+                            }
+                        }
                     }
-                }
-            }
-        });
+                });
+            out
+        };
+        // A corner lies within sqrt(3) (block - 1) samples of its block.
+        let far4 = near + 8.0 * s_max;
+        let coarse2 = coarse(2, near - 2.0 * s_max);
+        let coarse4 = coarse(4, far4 - 6.0 * s_max);
         let values = fbox.evaluate_guided(
             -1.0,
             |i| {
-                (f64::from(dist[i]) > near).then(|| {
-                    let (a, b, c) = (i % nu, (i / nu) % nv, i / (nu * nv));
-                    coarse[a / 2 + cu * (b / 2 + cv * (c / 2))]
-                })
+                let d = f64::from(dist[i]);
+                let (a, b, c) = (i % nu, (i / nu) % nv, i / (nu * nv));
+                if d > far4 {
+                    let (cu, cv) = (nu.div_ceil(4), nv.div_ceil(4));
+                    Some(coarse4[a / 4 + cu * (b / 4 + cv * (c / 4))])
+                } else if d > near {
+                    let (cu, cv) = (nu.div_ceil(2), nv.div_ceil(2));
+                    Some(coarse2[a / 2 + cu * (b / 2 + cv * (c / 2))])
+                } else {
+                    None
+                }
             },
             signed,
         );
         frame.to_xyz(fbox.iso_surface(&values, 0.0))
     }
+}
+
+/// The median perimeter (physical) of the contours of the drawn slices.
+fn median_perimeter(input: &SparseMask<'_>, frame: &Frame) -> f64 {
+    let pixel = frame.spacing[0].min(frame.spacing[1]);
+    let mut per: Vec<f64> = input
+        .drawn
+        .par_iter()
+        .flat_map_iter(|&d| {
+            let buf = input
+                .mask
+                .slice(input.axis, d)
+                .expect("validated drawn index");
+            slice_contours(&buf, d, frame, pixel)
+                .into_iter()
+                .map(|(_, pts)| {
+                    let n = pts.len();
+                    (0..n)
+                        .map(|i| {
+                            let (a, b) = (pts[i], pts[(i + 1) % n]);
+                            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+                        })
+                        .sum::<f64>()
+                })
+                .collect::<Vec<f64>>()
+        })
+        .collect();
+    per.sort_by(f64::total_cmp);
+    per.get(per.len() / 2).copied().unwrap_or(0.0)
 }
 
 impl Interpolator for UnorganizedPoints {

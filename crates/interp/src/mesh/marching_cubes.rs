@@ -139,6 +139,10 @@ impl PlaneVerts {
 
 const EXTRA: u32 = 1 << 31;
 
+/// The triangles of one layer of cubes and the extra (loop centre) vertices
+/// they refer to with the `EXTRA` bit.
+type Layer = (Vec<[u32; 3]>, Vec<[f64; 3]>);
+
 /// The iso-surface `value = iso` of a grid: a closed, outward-oriented mesh
 /// around the region `value > iso` (open only where that region touches the
 /// grid border; pad the grid with an outside layer to close it). Work is
@@ -209,7 +213,7 @@ pub fn marching_cubes<T: Copy + Into<f32> + Sync>(grid: Grid<'_, T>, iso: f32) -
     }
     let table = case_table();
     // Pass 2: the triangles of each layer of cubes (between planes k and k+1).
-    let layers: Vec<(Vec<[u32; 3]>, Vec<[f64; 3]>)> = (0..nz - 1)
+    let layers: Vec<Layer> = (0..nz - 1)
         .into_par_iter()
         .map(|k| {
             let mut tris = Vec::new();
@@ -315,16 +319,16 @@ mod tests {
     fn table_has_all_cases_and_complements_mirror() {
         let t = case_table();
         assert!(t[0].is_empty() && t[255].is_empty());
-        for case in 1..255usize {
-            assert!(!t[case].is_empty(), "case {case} has a surface");
+        for (case, loops) in t.iter().enumerate().take(255).skip(1) {
+            assert!(!loops.is_empty(), "case {case} has a surface");
             // Each crossed edge appears in exactly one loop.
             let crossed: usize = EDGES
                 .iter()
                 .filter(|&&(a, b)| (case >> a & 1) != (case >> b & 1))
                 .count();
-            let used: usize = t[case].iter().map(|l| l.len()).sum();
+            let used: usize = loops.iter().map(|l| l.len()).sum();
             assert_eq!(crossed, used, "case {case}");
-            assert!(t[case].iter().all(|l| l.len() >= 3));
+            assert!(loops.iter().all(|l| l.len() >= 3));
         }
         // A single corner gives one triangle; the checkerboard four.
         assert_eq!(t[1].len(), 1);

@@ -185,7 +185,7 @@ impl Frame {
 
     /// Map a mesh from the (u, v, w) frame to (x, y, z), keeping triangles
     /// wound outwards (the y-axis frame is a reflection).
-    pub fn to_xyz(&self, mut mesh: TriMesh) -> TriMesh {
+    pub fn to_xyz(self, mut mesh: TriMesh) -> TriMesh {
         match self.axis {
             Axis::Z => {}
             Axis::Y => {
@@ -348,27 +348,6 @@ impl FieldBox {
             || a + 1 == self.size[0]
             || b + 1 == self.size[1]
             || c + 1 == self.size[2]
-    }
-
-    /// Evaluate `f(position)` at every non-padding sample (in parallel over
-    /// w planes); padding samples get `outside`.
-    pub fn evaluate(&self, outside: f32, f: impl Fn([f64; 3]) -> f32 + Sync) -> Vec<f32> {
-        let [nu, nv, _] = self.size;
-        let mut values = vec![outside; self.len()];
-        values
-            .par_chunks_mut(nu * nv)
-            .enumerate()
-            .for_each(|(c, plane)| {
-                for b in 0..nv {
-                    for a in 0..nu {
-                        if !self.is_padding(a, b, c) {
-                            plane[a + nu * b] =
-                                f([self.coords[0][a], self.coords[1][b], self.coords[2][c]]);
-                        }
-                    }
-                }
-            });
-        values
     }
 
     /// Approximate distance from every sample to the nearest of `points`:

@@ -85,7 +85,6 @@ impl GaussianSplat {
         let pixel = frame.spacing[0].max(frame.spacing[1]);
         let bridge = (0.5 * max_filled_gap(input, &frame) + pixel) / reach;
         let r = (self.radius * longest).max(bridge);
-        let t0 = std::time::Instant::now();
         let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&points);
         let fbox = FieldBox::around(&frame, lo, hi, r);
         let (exponent, r2) = (self.exponent, r * r);
@@ -95,15 +94,6 @@ impl GaussianSplat {
         // edge there, so marching cubes never reads the exact value).
         let d_iso = self.iso_distance(r);
         let (dist, e) = fbox.seed_distance(&points);
-        eprintln!("TMP edt {:?}", t0.elapsed());
-        let nq = dist
-            .iter()
-            .filter(|&&d| {
-                let d = f64::from(d);
-                !(d - e - 1.0 > d_iso || d + e + 1.0 < d_iso)
-            })
-            .count();
-        eprintln!("TMP exact {nq} of {}", dist.len());
         let band = e + frame.spacing.iter().copied().fold(0.0, f64::max);
         let mut values = fbox.evaluate_guided(
             0.0,
@@ -126,14 +116,7 @@ impl GaussianSplat {
                 }
             },
         );
-        eprintln!(
-            "TMP splat field {:?} {:?} pts {}",
-            fbox.size,
-            t0.elapsed(),
-            points.len()
-        );
         fbox.fill_plane_holes(&mut values, self.threshold, 1.0);
-        eprintln!("TMP fill {:?}", t0.elapsed());
         frame.to_xyz(fbox.iso_surface(&values, self.threshold))
     }
 }

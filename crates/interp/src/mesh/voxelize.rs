@@ -77,7 +77,7 @@ fn centre(n: usize, s: f64) -> f64 {
 /// marching-cubes vertices are) must count as touching it, and rounding in
 /// `a / s - 0.5` could otherwise move the bound by one (e.g. `26.5 * 0.8`).
 fn centre_range(a: f64, b: f64, s: f64, len: usize) -> Option<(usize, usize)> {
-    if len == 0 || !(a <= b) {
+    if len == 0 || a.partial_cmp(&b).is_none_or(|o| o.is_gt()) {
         return None;
     }
     let last = len - 1;
