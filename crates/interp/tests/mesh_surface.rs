@@ -11,8 +11,17 @@ fn sphere(n: usize, spacing: [f64; 3], r: f64) -> Mask {
     for k in 0..n {
         for j in 0..n {
             for i in 0..n {
-                let p = [(i as f64 + 0.5) * spacing[0], (j as f64 + 0.5) * spacing[1], (k as f64 + 0.5) * spacing[2]];
-                m.set(i, j, k, (0..3).map(|d| (p[d] - c[d]).powi(2)).sum::<f64>() <= r * r);
+                let p = [
+                    (i as f64 + 0.5) * spacing[0],
+                    (j as f64 + 0.5) * spacing[1],
+                    (k as f64 + 0.5) * spacing[2],
+                ];
+                m.set(
+                    i,
+                    j,
+                    k,
+                    (0..3).map(|d| (p[d] - c[d]).powi(2)).sum::<f64>() <= r * r,
+                );
             }
         }
     }
@@ -39,12 +48,18 @@ fn sphere_surface_is_closed_oriented_and_has_the_right_volume() {
         assert!(mesh.is_closed_and_oriented(), "spacing {spacing:?}");
         let v = mesh.signed_volume();
         let exact = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
-        assert!((v - exact).abs() < 0.04 * exact, "volume {v} vs sphere {exact}");
+        assert!(
+            (v - exact).abs() < 0.04 * exact,
+            "volume {v} vs sphere {exact}"
+        );
         // Every vertex within a voxel of the sphere.
         let c = 24.0;
         let s = spacing.iter().cloned().fold(0.0, f64::max);
         for p in &mesh.vertices {
-            let d = ((p[0] - c * spacing[0]).powi(2) + (p[1] - c * spacing[1]).powi(2) + (p[2] - c * spacing[2]).powi(2)).sqrt();
+            let d = ((p[0] - c * spacing[0]).powi(2)
+                + (p[1] - c * spacing[1]).powi(2)
+                + (p[2] - c * spacing[2]).powi(2))
+            .sqrt();
             assert!((d - r).abs() < s, "vertex at {d}, radius {r}");
         }
         let back = voxelize(&mesh, m.geometry());
@@ -65,7 +80,11 @@ fn masks_touching_the_border_and_diagonal_voxels_give_closed_surfaces() {
     let mesh = mask_surface(&m);
     assert!(mesh.is_closed_and_oriented());
     // Four separate octahedra of volume 1/6 each.
-    assert!((mesh.signed_volume() - 4.0 / 6.0).abs() < 1e-9, "{}", mesh.signed_volume());
+    assert!(
+        (mesh.signed_volume() - 4.0 / 6.0).abs() < 1e-9,
+        "{}",
+        mesh.signed_volume()
+    );
     assert_eq!(voxelize(&mesh, m.geometry()), m);
     let empty: Mask = Volume::zeros(m.geometry().clone());
     assert!(mask_surface(&empty).is_empty());
@@ -77,11 +96,15 @@ fn winding_number(mesh: &TriMesh, p: [f64; 3]) -> f64 {
     let mut total = 0.0;
     for t in 0..mesh.triangles.len() {
         let c = mesh.corners(t);
-        let a: Vec<[f64; 3]> = c.iter().map(|q| [q[0] - p[0], q[1] - p[1], q[2] - p[2]]).collect();
+        let a: Vec<[f64; 3]> = c
+            .iter()
+            .map(|q| [q[0] - p[0], q[1] - p[1], q[2] - p[2]])
+            .collect();
         let len = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let dot = |u: [f64; 3], v: [f64; 3]| u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
         let (la, lb, lc) = (len(a[0]), len(a[1]), len(a[2]));
-        let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+        let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
             + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
         let den = la * lb * lc + dot(a[0], a[1]) * lc + dot(a[1], a[2]) * la + dot(a[2], a[0]) * lb;
         total += 2.0 * det.atan2(den);
@@ -100,11 +123,21 @@ fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
         })
         .collect();
     let mut triangles = Vec::new();
-    for q in [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]] {
+    for q in [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ] {
         triangles.push([q[0], q[1], q[2]]);
         triangles.push([q[0], q[2], q[3]]);
     }
-    TriMesh { vertices, triangles }
+    TriMesh {
+        vertices,
+        triangles,
+    }
 }
 
 fn tetra_mesh(p: [[f64; 3]; 4]) -> TriMesh {
@@ -112,11 +145,19 @@ fn tetra_mesh(p: [[f64; 3]; 4]) -> TriMesh {
         let a = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
         let b = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
         let c = [p[3][0] - p[0][0], p[3][1] - p[0][1], p[3][2] - p[0][2]];
-        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0])
     };
     // Faces outward for a positively oriented (a, b, c, d) in the right-handed sense.
-    let tris = if o > 0.0 { vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]] } else { vec![[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]] };
-    TriMesh { vertices: p.to_vec(), triangles: tris }
+    let tris = if o > 0.0 {
+        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]
+    } else {
+        vec![[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]]
+    };
+    TriMesh {
+        vertices: p.to_vec(),
+        triangles: tris,
+    }
 }
 
 fn check_against_winding(mesh: &TriMesh, g: &Geometry) -> Result<(), TestCaseError> {
@@ -125,13 +166,25 @@ fn check_against_winding(mesh: &TriMesh, g: &Geometry) -> Result<(), TestCaseErr
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
-                let p = [(i as f64 + 0.5) * g.spacing[0], (j as f64 + 0.5) * g.spacing[1], (k as f64 + 0.5) * g.spacing[2]];
+                let p = [
+                    (i as f64 + 0.5) * g.spacing[0],
+                    (j as f64 + 0.5) * g.spacing[1],
+                    (k as f64 + 0.5) * g.spacing[2],
+                ];
                 let w = winding_number(mesh, p);
                 // Points very close to the surface are ambiguous for the brute-force test.
                 if (w.abs() - 0.5).abs() < 0.45 {
                     continue;
                 }
-                prop_assert_eq!(m.get(i, j, k), w.abs() > 0.5, "voxel {} {} {} winding {}", i, j, k, w);
+                prop_assert_eq!(
+                    m.get(i, j, k),
+                    w.abs() > 0.5,
+                    "voxel {} {} {} winding {}",
+                    i,
+                    j,
+                    k,
+                    w
+                );
             }
         }
     }

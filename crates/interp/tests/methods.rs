@@ -309,18 +309,41 @@ fn fewer_than_two_drawn_slices_is_an_error() {
 }
 
 #[test]
-fn a_nucleolus_seen_on_one_drawn_slice_is_capped_towards_both_empty_neighbours() {
-    // A ball of radius 5.5 voxels, drawn every 10th slice: only z = 10 shows
-    // it, 4 slices from its centre (so not through its middle).
-    let gt = shape([32, 32, 31], [1.0, 1.0, 1.0], ellipsoid([16.0, 16.0, 14.5], [5.5; 3]));
+fn a_nucleolus_seen_on_one_drawn_slice_is_capped_best_on_average() {
+    // A ball of radius 5.5 voxels, drawn every 10th slice, so that only
+    // z = 10 shows it; where that slice cuts the ball is unknown to the
+    // method, so the ball's centre runs over the offsets -4..4 (in half
+    // voxels) and the mean Dice over them is compared.
     let drawn = [0usize, 10, 20, 30];
-    let m = interslice_interp::by_name("shape-aligned").unwrap();
-    let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
-    let d = dice(&out, &gt);
-    let z_extent: Vec<usize> = (0..31)
-        .filter(|&k| out.slice(Axis::Z, k).unwrap().iter().any(|&x| x))
-        .collect();
-    println!("single-slice ball: Dice {d:.4}, slices {z_extent:?}");
-    assert!(d >= 0.0, "Dice {d:.4}");
-    assert!(z_extent.iter().all(|&k| k != 0 && k != 20));
+    let offsets: Vec<f64> = (-8..=8).map(|i| i as f64 * 0.5).collect();
+    let mut mean = Vec::new();
+    for m in methods() {
+        let mut sum = 0.0;
+        for &dz in &offsets {
+            let gt = shape(
+                [32, 32, 31],
+                [1.0, 1.0, 1.0],
+                ellipsoid([16.0, 16.0, 10.5 + dz], [5.5; 3]),
+            );
+            let out = run(m.as_ref(), &gt, Axis::Z, &drawn);
+            for k in [0usize, 20] {
+                assert!(
+                    !out.slice(Axis::Z, k).unwrap().iter().any(|&x| x),
+                    "{}: drawn-empty z={k} got voxels",
+                    m.name()
+                );
+            }
+            sum += dice(&out, &gt);
+        }
+        mean.push((m.name(), sum / offsets.len() as f64));
+    }
+    // Measured: shape-aligned 0.713, marching-cubes 0.705, shape-cubic 0.700,
+    // shape-based 0.698.
+    println!("mean Dice over offsets: {mean:?}");
+    let (best, _) = mean
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert_eq!(best, "shape-aligned", "{mean:?}");
 }

@@ -152,6 +152,7 @@ pub fn run(a: Args) -> Result<()> {
     let names: Vec<&str> = chosen.iter().map(|m| m.name()).collect();
     let ctx = Context_ {
         source: &a.ground_truth,
+        provenance: provenance(&a),
         gt: &gt,
         axis: a.axis,
         labels: &labels,
@@ -267,6 +268,8 @@ fn run_one(
 /// Everything the outputs are written from.
 struct Context_<'a> {
     source: &'a Path,
+    /// How to regenerate the ground truth (when it is a phantom) and the study.
+    provenance: Provenance,
     gt: &'a LabelVolume,
     axis: Axis,
     labels: &'a [u16],
@@ -458,6 +461,91 @@ fn plot(
     Ok(())
 }
 
+/// Where the ground truth came from and the commands that regenerate the study.
+struct Provenance {
+    /// The `interslice phantom` command that wrote the ground truth, when the
+    /// `phantom.json` next to it says so.
+    phantom: Option<String>,
+    /// The commands that regenerate the study (the phantom's first).
+    commands: Vec<String>,
+}
+
+/// The phantom command recorded in the `phantom.json` next to `gt` (written
+/// by `interslice phantom` with its parameters), if `gt` is one of its label
+/// volumes; `dir` stands for the phantom's output folder.
+fn phantom_command(gt: &Path, dir: &str) -> Option<String> {
+    let name = gt.file_name()?.to_string_lossy().to_string();
+    let text = std::fs::read_to_string(gt.parent()?.join("phantom.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    if v.get("generator")?.as_str()? != "interslice phantom" {
+        return None;
+    }
+    let ours = v
+        .get("cells")?
+        .as_array()?
+        .iter()
+        .any(|c| c.get("labels").and_then(|l| l.as_str()) == Some(name.as_str()));
+    if !ours {
+        return None;
+    }
+    let p = v.get("params")?;
+    let mut cmd = format!(
+        "interslice phantom --out {dir} --count {} --size {} --seed {}",
+        p.get("count")?.as_u64()?,
+        p.get("size")?.as_u64()?,
+        p.get("seed")?.as_u64()?
+    );
+    // Only the label volume matters here; intensity options when not default.
+    if let Some(b) = p.get("bits").and_then(|b| b.as_u64()).filter(|&b| b != 8) {
+        let _ = write!(cmd, " --bits {b}");
+    }
+    if let Some(n) = p
+        .get("noise")
+        .and_then(|n| n.as_f64())
+        .filter(|&n| (n - 0.02).abs() > 1e-12)
+    {
+        let _ = write!(cmd, " --noise {n}");
+    }
+    Some(cmd)
+}
+
+/// The provenance of a study run with `a`.
+fn provenance(a: &Args) -> Provenance {
+    let gt = &a.ground_truth;
+    let name = gt
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let dir = gt
+        .parent()
+        .and_then(|d| d.file_name())
+        .map(|d| d.to_string_lossy().to_string())
+        .unwrap_or_else(|| "phantom".into());
+    let phantom = phantom_command(gt, &dir);
+    let mut study = match &phantom {
+        Some(_) => format!("interslice study {dir}/{name}"),
+        None => format!("interslice study {name}"),
+    };
+    let _ = write!(study, " --out {}", a.out.display());
+    if a.axis != Axis::Z {
+        let _ = write!(study, " --axis {}", a.axis);
+    }
+    if a.skips != "0..9" {
+        let _ = write!(study, " --skips {}", a.skips);
+    }
+    if let Some(m) = &a.methods {
+        let _ = write!(study, " --methods {}", m.join(","));
+    }
+    if let Some(l) = a.label {
+        let _ = write!(study, " --label {l}");
+    }
+    if a.tolerance != interslice_core::metrics::DEFAULT_TOLERANCE {
+        let _ = write!(study, " --tolerance {}", a.tolerance);
+    }
+    let commands = phantom.iter().cloned().chain([study]).collect();
+    Provenance { phantom, commands }
+}
+
 /// The markdown summary: the setup, a table per plotted metric (mean over the
 /// studied labels, best per column in bold), per-label Dice and timings.
 fn summary(ctx: &Context_<'_>) -> String {
@@ -466,13 +554,18 @@ fn summary(ctx: &Context_<'_>) -> String {
     let _ = writeln!(s, "# Interpolation study\n");
     let _ = writeln!(
         s,
-        "Ground truth `{}`: {}x{}x{} voxels, spacing {} x {} x {} {}; slices dropped along {}; \
+        "Ground truth `{}`{}: {}x{}x{} voxels, spacing {} x {} x {} {}; slices dropped along {}; \
          labels {:?}. For k skipped slices the drawn slices are the first and last non-empty \
          slices and every (k+1)-th slice from the first. Values are the mean over the labels. \
          Best per column in **bold**; the default method is `{}`.\n",
         ctx.source
             .file_name()
             .map(|f| f.to_string_lossy().to_string())
+            .unwrap_or_default(),
+        ctx.provenance
+            .phantom
+            .as_ref()
+            .map(|c| format!(" (the label volume written by `{c}`)"))
             .unwrap_or_default(),
         g.dims[0],
         g.dims[1],
@@ -484,6 +577,11 @@ fn summary(ctx: &Context_<'_>) -> String {
         ctx.axis,
         ctx.labels,
         DEFAULT_METHOD
+    );
+    let _ = writeln!(
+        s,
+        "Regenerate with (release build):\n\n```\n{}\n```\n",
+        ctx.provenance.commands.join("\n")
     );
     for &(key, title, higher) in PLOTTED {
         let series = mean_series(ctx, key);

@@ -240,6 +240,23 @@ impl UnorganizedPoints {
                 }
             }
         }
+        // A safeguard the paper does not need with dense samples: when most
+        // normals of a component point towards its centroid, the propagation
+        // went wrong from the start (a small object whose neighbourhoods span
+        // all of it), so the whole component is turned outwards.
+        let mut vote: std::collections::HashMap<u32, f64> = std::collections::HashMap::new();
+        for i in 0..n {
+            let r = find(&mut parent, i as u32);
+            let (sm, m) = sum[&r];
+            let rel: [f64; 3] = std::array::from_fn(|d| points[i][d] - sm[d] / m);
+            *vote.entry(r).or_insert(0.0) += dot(planes[i].1, rel).signum();
+        }
+        for (i, plane) in planes.iter_mut().enumerate() {
+            let r = find(&mut parent, i as u32);
+            if vote[&r] < 0.0 {
+                plane.1 = plane.1.map(|x| -x);
+            }
+        }
         planes
     }
 
@@ -253,7 +270,7 @@ impl UnorganizedPoints {
         // span a patch of its own contour and the adjacent ones rather than
         // whole small contours (whose covariance has no clear normal).
         let perimeter = median_perimeter(input, &frame);
-        let step = pixel.max(0.5 * gap); let _ = perimeter;
+        let step = pixel.max((0.5 * gap).min(perimeter / 16.0));
         let points = contour_points(input, &frame, step);
         let Some((lo, hi)) = point_bounds(&points) else {
             return TriMesh::new();

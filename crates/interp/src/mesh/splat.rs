@@ -20,7 +20,7 @@
 //! the first and last contour, which it circles like a torus, and between
 //! contours that differ a lot), so a 3D cavity fill would leave it hollow.
 //! Instead every plane parallel to the drawn slices is filled where the shell
-//! encloses it (see [`FieldBox::fill_plane_holes`]); the outer surface of
+//! encloses it (see `FieldBox::fill_plane_holes`); the outer surface of
 //! that solid is voxelised. One deviation from VTK's rule: when the drawn
 //! slices are further apart than the splats reach, `R` is raised until
 //! `d >= gap / 2 + pixel` for the largest gap between consecutive non-empty
