@@ -21,14 +21,16 @@
 //!    drawn slice: the cross-section shrinks (or first widens, for `c > 0`)
 //!    by the ratio `ρ(z) / r`, `ρ(z)² = r² + 2cz − z²` ([`Cap`]), applied to
 //!    the signed distance measured from the pixel edges, so that the cap
-//!    vanishes where `ρ` does whatever the cross-section's shape. `c` comes
-//!    from the sphere through the object's cross-sections on this and the
-//!    previous drawn slice (`cap_trend`); for an object seen on one drawn
-//!    slice only, from the sphere most likely to match given that both
-//!    neighbouring drawn slices lack it (`single_slice_centres`: a
-//!    cross-section near the object's middle gives the sphere of radius `r`,
-//!    one near its pole a longer cap). The sphere never reaches the drawn
-//!    slice that lacks the object: it ends half a slice short of it.
+//!    vanishes where `ρ` does whatever the cross-section's shape. When the
+//!    object shows on the previous drawn slice too, the sphere through both
+//!    cross-sections (`cap_trend`) gives where the cap ends, and the
+//!    cross-section shrinks to that end along a quarter ellipse; for an
+//!    object seen on one drawn slice only, `c` comes from the sphere with
+//!    the best expected Dice given that both neighbouring drawn slices lack
+//!    it (`single_slice_centres`: a cross-section near the object's middle
+//!    gives the sphere of radius `r`, one near its pole a longer cap). A cap
+//!    never reaches the drawn slice that lacks the object: it ends half a
+//!    slice short of it.
 //! 5. Beyond the first and last drawn slices, objects on the outermost slice
 //!    get the same cap (when [`ShapeAligned::end_caps`] is on), at most one
 //!    neighbouring gap long: a slice outside the drawn range is not known to
@@ -378,6 +380,9 @@ struct Cap {
     len: f64,
     /// Axis compression: the profile is evaluated at `z * scale`.
     scale: f64,
+    /// Shrink along a quarter ellipse `sqrt(1 − (z / len)²)` to the same end
+    /// instead of along the sphere.
+    quarter_ellipse: bool,
 }
 
 impl Cap {
@@ -390,7 +395,13 @@ impl Cap {
         } else {
             1.0
         };
-        Cap { r, c, len, scale }
+        Cap {
+            r,
+            c,
+            len,
+            scale,
+            quarter_ellipse: false,
+        }
     }
 
     /// Cross-section radius relative to the drawn one at distance `z`;
@@ -400,6 +411,10 @@ impl Cap {
         if z >= self.len || self.r <= 0.0 {
             return None;
         }
+        if self.quarter_ellipse {
+            let q = z / self.len;
+            return Some((1.0 - q * q).sqrt());
+        }
         let z = z * self.scale;
         let rho2 = self.r * self.r + 2.0 * self.c * z - z * z;
         (rho2 > 0.0).then(|| rho2.sqrt() / self.r)
@@ -408,7 +423,7 @@ impl Cap {
     /// Largest cross-section radius relative to the drawn one (> 1 when the
     /// sphere's centre lies past the drawn slice).
     fn max_ratio(&self) -> f64 {
-        if self.c > 0.0 && self.r > 0.0 {
+        if self.c > 0.0 && self.r > 0.0 && !self.quarter_ellipse {
             (1.0 + (self.c / self.r).powi(2)).sqrt()
         } else {
             1.0
@@ -524,13 +539,23 @@ fn make_cap(
     // A sphere that reaches the empty slice contradicts it: its centre is
     // kept where the sphere ends at `toward` at the latest.
     let reach = ((toward * toward - r * r) / (2.0 * toward)).max(0.0);
-    let c = cap_trend(this, comps, behind, plane)
-        .unwrap_or_else(|| {
+    let cap = match cap_trend(this, comps, behind, plane) {
+        // Two cross-sections fix where the sphere through them ends, not the
+        // object's elongation: the cross-section shrinks along a quarter
+        // ellipse to that end.
+        Some(c) => Cap {
+            quarter_ellipse: true,
+            ..Cap::new(r, c.min(reach), max_len)
+        },
+        None => {
             let away = behind.map_or(toward, |(_, h)| h);
-            single_slice_centres(r, toward, away).0
-        })
-        .min(reach);
-    let cap = Cap::new(r, c, max_len);
+            Cap::new(
+                r,
+                single_slice_centres(r, toward, away).0.min(reach),
+                max_len,
+            )
+        }
+    };
     let probe = Crop::of_group(this, comps, None, 2, plane);
     let depth = probe.depth();
     let grow = depth as f64 * (cap.max_ratio() - 1.0) / plane.spacing[0].min(plane.spacing[1]);

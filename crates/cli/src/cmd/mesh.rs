@@ -73,6 +73,14 @@ pub fn run(a: Args) -> Result<()> {
     let (m, t) = world_transform(labels.geometry());
     mesh.transform(m, t);
     write_mesh_as(&a.out, &mesh, format).with_context(|| format!("writing {}", a.out.display()))?;
+    let unit = labels.geometry().unit.symbol();
+    println!(
+        "{} triangles, area {:.6} {unit}², enclosed volume {:.6} {unit}³ -> {}",
+        mesh.triangles.len(),
+        mesh.area(),
+        mesh.signed_volume().abs(),
+        a.out.display()
+    );
     Ok(())
 }
 
