@@ -56,7 +56,11 @@ fn extract_then_rasterize_gives_the_volume_back() {
     let v = labels();
     interslice_io::write_labels(&src, &v).unwrap();
     let json = dir.path().join("contours.json");
-    run(bin().args(["contours", "extract"]).arg(&src).arg("--out").arg(&json));
+    run(bin()
+        .args(["contours", "extract"])
+        .arg(&src)
+        .arg("--out")
+        .arg(&json));
     let back = dir.path().join("back.nrrd");
     let drawn = dir.path().join("drawn.txt");
     run(bin()
@@ -105,7 +109,11 @@ fn sparse_extraction_keeps_first_last_and_every_nth_slice() {
         } else {
             vec![0; 30 * 26]
         };
-        assert_eq!(b.slice(interslice_core::Axis::Z, k).unwrap(), want, "slice {k}");
+        assert_eq!(
+            b.slice(interslice_core::Axis::Z, k).unwrap(),
+            want,
+            "slice {k}"
+        );
     }
 }
 
@@ -116,7 +124,10 @@ fn bad_contours_files_are_one_line_errors() {
     let bad = dir.path().join("bad.json");
     for (text, want) in [
         ("{\"format\": ", "malformed JSON"),
-        ("{\"format\": \"interslice-contours\", \"version\": 9}", "unsupported version 9"),
+        (
+            "{\"format\": \"interslice-contours\", \"version\": 9}",
+            "unsupported version 9",
+        ),
     ] {
         std::fs::write(&bad, text).unwrap();
         let o = bin()

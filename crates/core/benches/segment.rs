@@ -31,7 +31,11 @@ fn volume(n: usize) -> AnyVolume {
 fn rater(truth: &Mask, flip: f64, seed: u64) -> Mask {
     // Flips drawn in storage order so the rater is the same on any thread count.
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let data = truth.data().iter().map(|&t| if rng.gen_bool(flip) { !t } else { t }).collect();
+    let data = truth
+        .data()
+        .iter()
+        .map(|&t| if rng.gen_bool(flip) { !t } else { t })
+        .collect();
     Mask::from_vec(truth.geometry().clone(), data).unwrap()
 }
 
@@ -47,15 +51,23 @@ fn benches(c: &mut Criterion) {
     });
     drop(v512);
     let v256 = volume(256);
-    g.bench_function("segment_otsu_u16_256", |b| b.iter(|| black_box(segment(&v256, &SegmentParams::default()).unwrap())));
+    g.bench_function("segment_otsu_u16_256", |b| {
+        b.iter(|| black_box(segment(&v256, &SegmentParams::default()).unwrap()))
+    });
     let truth = match &v256 {
         AnyVolume::U16(x) => x.map(|a| a > 16000),
         _ => unreachable!(),
     };
     drop(v256);
-    let raters = [rater(&truth, 0.01, 1), rater(&truth, 0.02, 2), rater(&truth, 0.05, 3)];
+    let raters = [
+        rater(&truth, 0.01, 1),
+        rater(&truth, 0.02, 2),
+        rater(&truth, 0.05, 3),
+    ];
     let refs: Vec<&Mask> = raters.iter().collect();
-    g.bench_function("staple_3_raters_256", |b| b.iter(|| black_box(staple(&refs, StapleParams::default()).unwrap())));
+    g.bench_function("staple_3_raters_256", |b| {
+        b.iter(|| black_box(staple(&refs, StapleParams::default()).unwrap()))
+    });
     g.finish();
 }
 

@@ -36,7 +36,13 @@ pub struct Contour {
 impl Contour {
     /// A contour without timing, pressure or tool (e.g. one derived from a mask),
     /// so callers need not list every optional field.
-    pub fn new(slice: SliceRef, label: u16, points: Vec<[f64; 2]>, author: impl Into<String>, created: impl Into<String>) -> Contour {
+    pub fn new(
+        slice: SliceRef,
+        label: u16,
+        points: Vec<[f64; 2]>,
+        author: impl Into<String>,
+        created: impl Into<String>,
+    ) -> Contour {
         Contour {
             slice,
             label,

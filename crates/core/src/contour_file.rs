@@ -95,7 +95,10 @@ impl ContourFile {
         let mut ids = HashSet::new();
         for l in &self.labels {
             if l.id == 0 {
-                return Err(invalid(format!("label '{}' has id 0 (0 is background)", l.name)));
+                return Err(invalid(format!(
+                    "label '{}' has id 0 (0 is background)",
+                    l.name
+                )));
             }
             if !ids.insert(l.id) {
                 return Err(invalid(format!("label id {} is listed twice", l.id)));
@@ -122,10 +125,18 @@ impl ContourFile {
         for (n, c) in self.contours.iter().enumerate() {
             let at = || format!("contour #{n} (label {}, slice {})", c.label, c.slice);
             if !ids.contains(&c.label) {
-                return Err(invalid(format!("{}: label {} is not in \"labels\"", at(), c.label)));
+                return Err(invalid(format!(
+                    "{}: label {} is not in \"labels\"",
+                    at(),
+                    c.label
+                )));
             }
             in_range(c.slice).map_err(|e| invalid(format!("{}: {e}", at())))?;
-            if let Some(p) = c.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            if let Some(p) = c
+                .points
+                .iter()
+                .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+            {
                 return Err(invalid(format!("{}: point #{p} is not finite", at())));
             }
             if let Some(pr) = &c.pressure {
@@ -159,7 +170,11 @@ impl ContourFile {
         for (n, e) in self.drawn_empty.iter().enumerate() {
             let at = || format!("drawn_empty #{n} (label {}, slice {})", e.label, e.slice);
             if !ids.contains(&e.label) {
-                return Err(invalid(format!("{}: label {} is not in \"labels\"", at(), e.label)));
+                return Err(invalid(format!(
+                    "{}: label {} is not in \"labels\"",
+                    at(),
+                    e.label
+                )));
             }
             in_range(e.slice).map_err(|err| invalid(format!("{}: {err}", at())))?;
             if traced.contains(&(e.slice, e.label, e.author.as_str())) {
@@ -262,7 +277,11 @@ pub fn read(text: &str) -> Result<ContourFile, CoreError> {
     match header.format {
         Some(serde_json::Value::String(f)) if f == FORMAT => {}
         Some(f) => return Err(invalid(format!("\"format\" is {f}, expected \"{FORMAT}\""))),
-        None => return Err(invalid(format!("no \"format\" key (expected \"{FORMAT}\")"))),
+        None => {
+            return Err(invalid(format!(
+                "no \"format\" key (expected \"{FORMAT}\")"
+            )));
+        }
     }
     match header.version {
         Some(v) if v.as_u64() == Some(VERSION as u64) => {}
@@ -275,8 +294,8 @@ pub fn read(text: &str) -> Result<ContourFile, CoreError> {
     }
     let wire: Wire = serde_json::from_str(text).map_err(|e| invalid(e.to_string()))?;
     let g = wire.geometry;
-    let unit = LengthUnit::parse(&g.unit)
-        .ok_or_else(|| invalid(format!("unknown unit '{}'", g.unit)))?;
+    let unit =
+        LengthUnit::parse(&g.unit).ok_or_else(|| invalid(format!("unknown unit '{}'", g.unit)))?;
     let geometry = Geometry {
         dims: g.dims,
         spacing: g.spacing,
@@ -434,22 +453,43 @@ mod tests {
         );
         assert_eq!(f.contours.len(), 3);
         let c = &f.contours[0];
-        assert_eq!(c.slice, SliceRef { axis: Axis::Z, index: 10 });
+        assert_eq!(
+            c.slice,
+            SliceRef {
+                axis: Axis::Z,
+                index: 10
+            }
+        );
         assert_eq!(c.label, 1);
         assert_eq!(c.author, "alice");
         assert_eq!(c.created, "2024-05-02T09:14:03Z");
         assert_eq!(c.tool.as_deref(), Some("pen"));
-        assert_eq!(c.points, vec![[10.5, 4.0], [30.25, 6.0], [28.0, 27.5], [8.125, 20.0]]);
+        assert_eq!(
+            c.points,
+            vec![[10.5, 4.0], [30.25, 6.0], [28.0, 27.5], [8.125, 20.0]]
+        );
         assert_eq!(c.pressure, Some(vec![0.5, 0.625, 0.75, 0.5]));
         assert_eq!(c.times_ms, Some(vec![0.0, 410.0, 905.5, 1320.0]));
         let c = &f.contours[2];
-        assert_eq!(c.slice, SliceRef { axis: Axis::X, index: 20 });
+        assert_eq!(
+            c.slice,
+            SliceRef {
+                axis: Axis::X,
+                index: 20
+            }
+        );
         assert_eq!(c.label, 3);
-        assert_eq!((c.tool.as_ref(), c.pressure.as_ref(), c.times_ms.as_ref()), (None, None, None));
+        assert_eq!(
+            (c.tool.as_ref(), c.pressure.as_ref(), c.times_ms.as_ref()),
+            (None, None, None)
+        );
         assert_eq!(
             f.drawn_empty,
             vec![DrawnEmpty {
-                slice: SliceRef { axis: Axis::Z, index: 2 },
+                slice: SliceRef {
+                    axis: Axis::Z,
+                    index: 2
+                },
                 label: 2,
                 author: "alice".into()
             }]
@@ -459,13 +499,34 @@ mod tests {
 
     #[test]
     fn round_trip_keeps_every_value() {
-        let mut g = Geometry::new([5, 6, 7], [0.1, 0.2, 0.30000000000000004], LengthUnit::Millimetre).unwrap();
+        let mut g = Geometry::new(
+            [5, 6, 7],
+            [0.1, 0.2, 0.30000000000000004],
+            LengthUnit::Millimetre,
+        )
+        .unwrap();
         g.origin = [1.5, -2.0, 1e-9];
         let mut f = ContourFile::new(g);
-        let mut c = Contour::new(SliceRef { axis: Axis::Y, index: 5 }, 5, vec![[0.1, 0.2], [1.0 / 3.0, 5.0], [-1.0, 1e300]], "bob \"b\"", "t");
+        let mut c = Contour::new(
+            SliceRef {
+                axis: Axis::Y,
+                index: 5,
+            },
+            5,
+            vec![[0.1, 0.2], [1.0 / 3.0, 5.0], [-1.0, 1e300]],
+            "bob \"b\"",
+            "t",
+        );
         c.tool = Some("mouse".into());
         f.contours.push(c);
-        f.drawn_empty.push(DrawnEmpty { slice: SliceRef { axis: Axis::X, index: 4 }, label: 1, author: "bob".into() });
+        f.drawn_empty.push(DrawnEmpty {
+            slice: SliceRef {
+                axis: Axis::X,
+                index: 4,
+            },
+            label: 1,
+            author: "bob".into(),
+        });
         let text = write(&f).unwrap();
         let back = read(&text).unwrap();
         assert_eq!(back, f);
@@ -485,10 +546,19 @@ mod tests {
     fn bad_files_are_one_line_errors() {
         assert!(err("{\"format\": ").contains("malformed JSON"));
         assert!(err("[1, 2]").contains("malformed JSON"));
-        assert!(err("{\"format\": \"other\", \"version\": 1}").contains("expected \"interslice-contours\""));
+        assert!(
+            err("{\"format\": \"other\", \"version\": 1}")
+                .contains("expected \"interslice-contours\"")
+        );
         assert!(err("{\"version\": 1}").contains("no \"format\""));
-        assert!(err(&GOLDEN.replace("\"version\": 1", "\"version\": 2")).contains("unsupported version 2"));
-        assert!(err(&GOLDEN.replace("\"version\": 1", "\"version\": \"1\"")).contains("unsupported version"));
+        assert!(
+            err(&GOLDEN.replace("\"version\": 1", "\"version\": 2"))
+                .contains("unsupported version 2")
+        );
+        assert!(
+            err(&GOLDEN.replace("\"version\": 1", "\"version\": \"1\""))
+                .contains("unsupported version")
+        );
         // Slice out of range: z has 24 slices.
         let e = err(&GOLDEN.replace("\"axis\":\"z\",\"index\":10", "\"axis\":\"z\",\"index\":24"));
         assert!(e.contains("out of range"), "{e}");
@@ -500,13 +570,29 @@ mod tests {
         // Non-finite points cannot be written as JSON numbers: overflow and null.
         assert!(err(&GOLDEN.replace("[10.5,4.0]", "[1e999,4.0]")).contains("contours file"));
         assert!(err(&GOLDEN.replace("[10.5,4.0]", "[null,4.0]")).contains("contours file"));
-        assert!(err(&GOLDEN.replace("\"axis\":\"x\"", "\"axis\":\"w\"")).contains("unknown variant"));
-        assert!(err(&GOLDEN.replace("\"unit\":\"um\"", "\"unit\":\"furlong\"")).contains("unknown unit"));
-        assert!(err(&GOLDEN.replace("\"dims\":[40,32,24]", "\"dims\":[40,0,24]")).contains("contain 0"));
+        assert!(
+            err(&GOLDEN.replace("\"axis\":\"x\"", "\"axis\":\"w\"")).contains("unknown variant")
+        );
+        assert!(
+            err(&GOLDEN.replace("\"unit\":\"um\"", "\"unit\":\"furlong\""))
+                .contains("unknown unit")
+        );
+        assert!(
+            err(&GOLDEN.replace("\"dims\":[40,32,24]", "\"dims\":[40,0,24]")).contains("contain 0")
+        );
         assert!(err(&GOLDEN.replace("\"#1f77b4\"", "\"blue\"")).contains("#rrggbb"));
-        assert!(err(&GOLDEN.replace("\"tool\":\"pen\"", "\"tool\":\"pen\",\"colour\":1")).contains("unknown field"));
-        assert!(err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,0.75]")).contains("3 pressure values for 4 points"));
-        assert!(err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,1.75,0.5]")).contains("pressure outside"));
+        assert!(
+            err(&GOLDEN.replace("\"tool\":\"pen\"", "\"tool\":\"pen\",\"colour\":1"))
+                .contains("unknown field")
+        );
+        assert!(
+            err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,0.75]"))
+                .contains("3 pressure values for 4 points")
+        );
+        assert!(
+            err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,1.75,0.5]"))
+                .contains("pressure outside")
+        );
         // Drawn empty where the same author traced the same label.
         let e = err(&GOLDEN.replace("\"index\":2,\"label\":2", "\"index\":12,\"label\":2"));
         assert!(e.contains("also has a contour"), "{e}");
@@ -514,14 +600,28 @@ mod tests {
 
     #[test]
     fn write_rejects_what_read_would_reject() {
-        let mut f = ContourFile::new(Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap());
-        f.contours.push(Contour::new(SliceRef { axis: Axis::Z, index: 0 }, 1, vec![[f64::NAN, 0.0]], "a", "t"));
+        let mut f =
+            ContourFile::new(Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap());
+        f.contours.push(Contour::new(
+            SliceRef {
+                axis: Axis::Z,
+                index: 0,
+            },
+            1,
+            vec![[f64::NAN, 0.0]],
+            "a",
+            "t",
+        ));
         assert!(write(&f).unwrap_err().to_string().contains("not finite"));
         f.contours[0].points = vec![[0.0, 0.0]];
         f.contours[0].label = 42;
         assert!(write(&f).is_err());
         f.contours[0].label = 1;
-        f.labels.push(LabelInfo { id: 1, name: "again".into(), color: "#000000".into() });
+        f.labels.push(LabelInfo {
+            id: 1,
+            name: "again".into(),
+            color: "#000000".into(),
+        });
         assert!(write(&f).unwrap_err().to_string().contains("twice"));
     }
 }

@@ -31,9 +31,8 @@ impl LengthUnit {
     /// Parse a unit name as written by common tools ("um", "µm", "micron", "mm", ...).
     pub fn parse(s: &str) -> Option<LengthUnit> {
         match s.trim().to_ascii_lowercase().as_str() {
-            "um" | "µm" | "μm" | "micron" | "microns" | "micrometer" | "micrometre" | "\\u00b5m" => {
-                Some(LengthUnit::Micrometre)
-            }
+            "um" | "µm" | "μm" | "micron" | "microns" | "micrometer" | "micrometre"
+            | "\\u00b5m" => Some(LengthUnit::Micrometre),
             "mm" | "millimeter" | "millimetre" => Some(LengthUnit::Millimetre),
             "m" | "meter" | "metre" => Some(LengthUnit::Metre),
             "" | "unknown" | "pixel" | "unit" => Some(LengthUnit::Unknown),
@@ -73,7 +72,11 @@ pub const IDENTITY_DIRECTION: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0],
 
 impl Geometry {
     /// A geometry with the given dims and spacing, origin 0 and identity direction.
-    pub fn new(dims: [usize; 3], spacing: [f64; 3], unit: LengthUnit) -> Result<Geometry, CoreError> {
+    pub fn new(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        unit: LengthUnit,
+    ) -> Result<Geometry, CoreError> {
         let g = Geometry {
             dims,
             spacing,
@@ -88,10 +91,21 @@ impl Geometry {
     /// Check dims > 0 and finite spacing > 0.
     pub fn validate(&self) -> Result<(), CoreError> {
         if self.dims.contains(&0) {
-            return Err(CoreError::InvalidGeometry(format!("dims {:?} contain 0", self.dims)));
+            return Err(CoreError::InvalidGeometry(format!(
+                "dims {:?} contain 0",
+                self.dims
+            )));
         }
-        if self.dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).is_none() {
-            return Err(CoreError::InvalidGeometry(format!("dims {:?} overflow", self.dims)));
+        if self
+            .dims
+            .iter()
+            .try_fold(1usize, |a, &d| a.checked_mul(d))
+            .is_none()
+        {
+            return Err(CoreError::InvalidGeometry(format!(
+                "dims {:?} overflow",
+                self.dims
+            )));
         }
         if self.spacing.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
             return Err(CoreError::InvalidGeometry(format!(
@@ -100,7 +114,10 @@ impl Geometry {
             )));
         }
         if self.origin.iter().any(|o| !o.is_finite()) {
-            return Err(CoreError::InvalidGeometry(format!("origin {:?} is not finite", self.origin)));
+            return Err(CoreError::InvalidGeometry(format!(
+                "origin {:?} is not finite",
+                self.origin
+            )));
         }
         Ok(())
     }

@@ -11,15 +11,15 @@ pub mod contour_file;
 pub mod edt;
 pub mod error;
 pub mod geometry;
-pub mod raster;
 pub mod mesh;
-pub mod phantom;
 pub mod metrics;
 pub mod morph;
+pub mod phantom;
+pub mod raster;
 pub mod segment;
+pub mod slice;
 pub mod staple;
 pub mod threshold;
-pub mod slice;
 pub mod trace;
 pub mod volume;
 

@@ -40,7 +40,11 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 fn normalize(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
-    if n > 0.0 { [a[0] / n, a[1] / n, a[2] / n] } else { [0.0; 3] }
+    if n > 0.0 {
+        [a[0] / n, a[1] / n, a[2] / n]
+    } else {
+        [0.0; 3]
+    }
 }
 
 impl TriMesh {
@@ -58,7 +62,11 @@ impl TriMesh {
     #[inline]
     pub fn corners(&self, t: usize) -> [[f64; 3]; 3] {
         let [a, b, c] = self.triangles[t];
-        [self.vertices[a as usize], self.vertices[b as usize], self.vertices[c as usize]]
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
     }
 
     /// Append another mesh (its indices shifted); used to collect the
@@ -66,8 +74,12 @@ impl TriMesh {
     pub fn append(&mut self, other: &TriMesh) {
         let base = self.vertices.len() as u32;
         self.vertices.extend_from_slice(&other.vertices);
-        self.triangles
-            .extend(other.triangles.iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+        self.triangles.extend(
+            other
+                .triangles
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
     }
 
     /// Total surface area.
@@ -155,7 +167,11 @@ impl TriMesh {
         {
             return Err(format!("triangle {i} {t:?} refers to a vertex >= {n}"));
         }
-        if self.vertices.iter().any(|p| p.iter().any(|c| !c.is_finite())) {
+        if self
+            .vertices
+            .iter()
+            .any(|p| p.iter().any(|c| !c.is_finite()))
+        {
             return Err("mesh has a non-finite vertex".into());
         }
         Ok(())
@@ -189,7 +205,13 @@ mod tests {
     /// A unit cube with outward winding.
     pub(crate) fn cube(s: f64) -> TriMesh {
         let v = (0..8)
-            .map(|i| [s * (i & 1) as f64, s * ((i >> 1) & 1) as f64, s * ((i >> 2) & 1) as f64])
+            .map(|i| {
+                [
+                    s * (i & 1) as f64,
+                    s * ((i >> 1) & 1) as f64,
+                    s * ((i >> 2) & 1) as f64,
+                ]
+            })
             .collect();
         let quads = [
             [0, 2, 3, 1], // z = 0, normal -z
@@ -204,7 +226,10 @@ mod tests {
             triangles.push([q[0], q[1], q[2]]);
             triangles.push([q[0], q[2], q[3]]);
         }
-        TriMesh { vertices: v, triangles }
+        TriMesh {
+            vertices: v,
+            triangles,
+        }
     }
 
     #[test]
@@ -224,7 +249,10 @@ mod tests {
     #[test]
     fn open_mesh_is_detected_and_mirror_keeps_orientation() {
         let mut m = cube(1.0);
-        m.transform([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0; 3]);
+        m.transform(
+            [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            [0.0; 3],
+        );
         assert!((m.signed_volume() - 1.0).abs() < 1e-12);
         m.triangles.pop();
         assert!(!m.is_closed_and_oriented());

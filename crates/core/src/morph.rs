@@ -27,7 +27,9 @@ impl Connectivity {
         match s.trim().to_ascii_lowercase().as_str() {
             "6" | "4" | "face" => Ok(Connectivity::Face),
             "26" | "8" | "full" => Ok(Connectivity::Full),
-            o => Err(CoreError::Invalid(format!("unknown connectivity '{o}' (expected 6 or 26)"))),
+            o => Err(CoreError::Invalid(format!(
+                "unknown connectivity '{o}' (expected 6 or 26)"
+            ))),
         }
     }
 }
@@ -116,7 +118,11 @@ fn connect(runs: &Runs, dims: [usize; 3], conn: Connectivity) -> (Vec<u32>, usiz
     let n = runs.span.len();
     let mut uf = UnionFind::new(n);
     let full = conn == Connectivity::Full;
-    let prev: &[(i64, i64)] = if full { &[(-1, 0), (-1, -1), (0, -1), (1, -1)] } else { &[(-1, 0), (0, -1)] };
+    let prev: &[(i64, i64)] = if full {
+        &[(-1, 0), (-1, -1), (0, -1), (1, -1)]
+    } else {
+        &[(-1, 0), (0, -1)]
+    };
     for k in 0..nz {
         for j in 0..ny {
             let r = j + ny * k;
@@ -135,7 +141,11 @@ fn connect(runs: &Runs, dims: [usize; 3], conn: Connectivity) -> (Vec<u32>, usiz
                 while i < a1 && b < b1 {
                     let (ax0, ax1) = runs.span[i];
                     let (bx0, bx1) = runs.span[b];
-                    let touch = if full { ax0 <= bx1 && bx0 <= ax1 } else { ax0 < bx1 && bx0 < ax1 };
+                    let touch = if full {
+                        ax0 <= bx1 && bx0 <= ax1
+                    } else {
+                        ax0 < bx1 && bx0 < ax1
+                    };
                     if touch {
                         uf.union(i as u32, b as u32);
                     }
@@ -164,19 +174,26 @@ fn connect(runs: &Runs, dims: [usize; 3], conn: Connectivity) -> (Vec<u32>, usiz
 }
 
 /// Write `f(component)` of every run into a new volume, in parallel per slab.
-fn paint_runs<T: Voxel>(geometry: &Geometry, runs: &Runs, mut base: Vec<T>, value: impl Fn(usize) -> Option<T> + Sync) -> Volume<T> {
+fn paint_runs<T: Voxel>(
+    geometry: &Geometry,
+    runs: &Runs,
+    mut base: Vec<T>,
+    value: impl Fn(usize) -> Option<T> + Sync,
+) -> Volume<T> {
     let [nx, ny, _] = geometry.dims;
-    base.par_chunks_mut(nx * ny).enumerate().for_each(|(k, slab)| {
-        for j in 0..ny {
-            let r = j + ny * k;
-            for run in runs.row_start[r]..runs.row_start[r + 1] {
-                if let Some(v) = value(run) {
-                    let (x0, x1) = runs.span[run];
-                    slab[j * nx + x0 as usize..j * nx + x1 as usize].fill(v);
+    base.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(k, slab)| {
+            for j in 0..ny {
+                let r = j + ny * k;
+                for run in runs.row_start[r]..runs.row_start[r + 1] {
+                    if let Some(v) = value(run) {
+                        let (x0, x1) = runs.span[run];
+                        slab[j * nx + x0 as usize..j * nx + x1 as usize].fill(v);
+                    }
                 }
             }
-        }
-    });
+        });
     Volume::from_vec(geometry.clone(), base).expect("same geometry")
 }
 
@@ -191,7 +208,9 @@ pub fn label_components(mask: &Mask, conn: Connectivity) -> (Volume<u32>, Vec<u6
     for (r, &(x0, x1)) in runs.span.iter().enumerate() {
         sizes[id[r] as usize] += (x1 - x0) as u64;
     }
-    let labels = paint_runs(mask.geometry(), &runs, vec![0u32; mask.data().len()], |r| Some(id[r] + 1));
+    let labels = paint_runs(mask.geometry(), &runs, vec![0u32; mask.data().len()], |r| {
+        Some(id[r] + 1)
+    });
     (labels, sizes)
 }
 
@@ -214,7 +233,12 @@ pub fn largest_component(mask: &Mask, conn: Connectivity) -> Mask {
             best = c;
         }
     }
-    paint_runs(mask.geometry(), &runs, vec![false; mask.data().len()], |r| (id[r] as usize == best).then_some(true))
+    paint_runs(
+        mask.geometry(),
+        &runs,
+        vec![false; mask.data().len()],
+        |r| (id[r] as usize == best).then_some(true),
+    )
 }
 
 /// Fill the holes of `mask`: background components (connected by
@@ -231,7 +255,8 @@ pub fn fill_holes(mask: &Mask, background: Connectivity) -> Mask {
     for k in 0..nz {
         for j in 0..ny {
             let r = j + ny * k;
-            let edge_row = (ny > 1 && (j == 0 || j == ny - 1)) || (nz > 1 && (k == 0 || k == nz - 1));
+            let edge_row =
+                (ny > 1 && (j == 0 || j == ny - 1)) || (nz > 1 && (k == 0 || k == nz - 1));
             for run in runs.row_start[r]..runs.row_start[r + 1] {
                 let (x0, x1) = runs.span[run];
                 if edge_row || (nx > 1 && (x0 == 0 || x1 as usize == nx)) {
@@ -240,7 +265,9 @@ pub fn fill_holes(mask: &Mask, background: Connectivity) -> Mask {
             }
         }
     }
-    paint_runs(mask.geometry(), &runs, mask.data().to_vec(), |r| (!open[id[r] as usize]).then_some(true))
+    paint_runs(mask.geometry(), &runs, mask.data().to_vec(), |r| {
+        (!open[id[r] as usize]).then_some(true)
+    })
 }
 
 /// Fill holes in every slice along `axis` separately (2D holes, face-connected
@@ -271,7 +298,9 @@ pub fn fill_holes_per_slice(mask: &Mask, axis: Axis) -> Mask {
 /// result is f32; memory is one f32 copy of the volume plus one slab per thread.
 pub fn gaussian_smooth<T: Voxel>(v: &Volume<T>, sigma: f64) -> Result<Volume<f32>, CoreError> {
     if !(sigma.is_finite() && sigma >= 0.0) {
-        return Err(CoreError::Invalid(format!("smoothing sigma must be a finite number >= 0, not {sigma}")));
+        return Err(CoreError::Invalid(format!(
+            "smoothing sigma must be a finite number >= 0, not {sigma}"
+        )));
     }
     let g = v.geometry().clone();
     let [nx, ny, nz] = g.dims;
@@ -334,7 +363,9 @@ fn kernel(s: f64) -> Vec<f32> {
         return vec![1.0];
     }
     let r = (4.0 * s).ceil() as i64;
-    let w: Vec<f64> = (-r..=r).map(|x| (-(x * x) as f64 / (2.0 * s * s)).exp()).collect();
+    let w: Vec<f64> = (-r..=r)
+        .map(|x| (-(x * x) as f64 / (2.0 * s * s)).exp())
+        .collect();
     let sum: f64 = w.iter().sum();
     w.iter().map(|x| (x / sum) as f32).collect()
 }
@@ -355,7 +386,11 @@ mod tests {
     use proptest::prelude::*;
 
     fn mask(dims: [usize; 3], data: Vec<bool>) -> Mask {
-        Volume::from_vec(Geometry::new(dims, [1.0; 3], LengthUnit::Micrometre).unwrap(), data).unwrap()
+        Volume::from_vec(
+            Geometry::new(dims, [1.0; 3], LengthUnit::Micrometre).unwrap(),
+            data,
+        )
+        .unwrap()
     }
 
     /// Flood-fill labelling, voxel by voxel: the slow, obvious reference.
@@ -381,7 +416,13 @@ mod tests {
                                 continue;
                             }
                             let (a, b, c) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
-                            if a < 0 || b < 0 || c < 0 || a >= nx as i64 || b >= ny as i64 || c >= nz as i64 {
+                            if a < 0
+                                || b < 0
+                                || c < 0
+                                || a >= nx as i64
+                                || b >= ny as i64
+                                || c >= nz as i64
+                            {
                                 continue;
                             }
                             let q = m.geometry().index(a as usize, b as usize, c as usize);
@@ -446,7 +487,9 @@ mod tests {
     #[test]
     fn hollow_cube_is_filled_in_3d_and_per_slice() {
         let n = 5;
-        let mut m = Volume::<bool>::zeros(Geometry::new([n, n, n], [1.0; 3], LengthUnit::Micrometre).unwrap());
+        let mut m = Volume::<bool>::zeros(
+            Geometry::new([n, n, n], [1.0; 3], LengthUnit::Micrometre).unwrap(),
+        );
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
@@ -476,7 +519,9 @@ mod tests {
         assert!(s.data().iter().all(|&x| (x - 300.0).abs() < 1e-3));
         // An impulse far from the borders spreads with unit total weight,
         // symmetric about its voxel, wider along x (finer spacing).
-        let mut imp = Volume::<f32>::zeros(Geometry::new([21, 21, 21], [0.5, 1.0, 1.0], LengthUnit::Micrometre).unwrap());
+        let mut imp = Volume::<f32>::zeros(
+            Geometry::new([21, 21, 21], [0.5, 1.0, 1.0], LengthUnit::Micrometre).unwrap(),
+        );
         imp.set(10, 10, 10, 1000.0);
         let s = gaussian_smooth(&imp, 1.0).unwrap();
         let total: f32 = s.data().iter().sum();

@@ -151,7 +151,11 @@ pub fn validate_contour(geometry: &Geometry, contour: &Contour) -> Result<(), Co
             contour.slice
         )));
     }
-    if let Some(p) = contour.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+    if let Some(p) = contour
+        .points
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
         return Err(CoreError::Invalid(format!(
             "contour of label {} on slice {} has a non-finite point (#{p})",
             contour.label, contour.slice
@@ -200,45 +204,56 @@ fn rasterise_groups<'a>(
                 polygon_spans(&c.points, w, h, &mut spans);
             }
             spans.sort_unstable_by_key(|s| (s.row, s.start));
-            SliceSpans { label, slice, spans }
+            SliceSpans {
+                label,
+                slice,
+                spans,
+            }
         })
         .collect())
 }
 
 /// Paint the groups (in their order) into `data`, in parallel over z slabs.
-fn paint<T: Send + Copy>(geometry: &Geometry, groups: &[SliceSpans], data: &mut [T], value: impl Fn(u16) -> T + Sync) {
+fn paint<T: Send + Copy>(
+    geometry: &Geometry,
+    groups: &[SliceSpans],
+    data: &mut [T],
+    value: impl Fn(u16) -> T + Sync,
+) {
     let [nx, ny, _] = geometry.dims;
-    data.par_chunks_mut(nx * ny).enumerate().for_each(|(k, slab)| {
-        let k32 = k as u32;
-        for g in groups {
-            let val = value(g.label);
-            let idx = g.slice.index;
-            match g.slice.axis {
-                Axis::Z if idx == k => {
-                    for s in &g.spans {
-                        let row = s.row as usize * nx;
-                        slab[row + s.start as usize..row + s.end as usize].fill(val);
+    data.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(k, slab)| {
+            let k32 = k as u32;
+            for g in groups {
+                let val = value(g.label);
+                let idx = g.slice.index;
+                match g.slice.axis {
+                    Axis::Z if idx == k => {
+                        for s in &g.spans {
+                            let row = s.row as usize * nx;
+                            slab[row + s.start as usize..row + s.end as usize].fill(val);
+                        }
                     }
-                }
-                Axis::Z => {}
-                // Slice y=j shows (i, k): row v = k, u = i.
-                Axis::Y => {
-                    for s in g.row(k32) {
-                        let row = idx * nx;
-                        slab[row + s.start as usize..row + s.end as usize].fill(val);
+                    Axis::Z => {}
+                    // Slice y=j shows (i, k): row v = k, u = i.
+                    Axis::Y => {
+                        for s in g.row(k32) {
+                            let row = idx * nx;
+                            slab[row + s.start as usize..row + s.end as usize].fill(val);
+                        }
                     }
-                }
-                // Slice x=i shows (j, k): row v = k, u = j.
-                Axis::X => {
-                    for s in g.row(k32) {
-                        for j in s.start as usize..s.end as usize {
-                            slab[idx + nx * j] = val;
+                    // Slice x=i shows (j, k): row v = k, u = j.
+                    Axis::X => {
+                        for s in g.row(k32) {
+                            for j in s.start as usize..s.end as usize {
+                                slab[idx + nx * j] = val;
+                            }
                         }
                     }
                 }
             }
-        }
-    });
+        });
 }
 
 /// All contours (any axes, any labels) → a label volume of `geometry`;
@@ -247,7 +262,10 @@ fn paint<T: Send + Copy>(geometry: &Geometry, groups: &[SliceSpans], data: &mut 
 ///
 /// Errors when a contour's slice is out of range, its label is 0 or a point
 /// is not finite. Contours with fewer than 3 points paint nothing.
-pub fn contours_to_labels(geometry: &Geometry, contours: &[Contour]) -> Result<LabelVolume, CoreError> {
+pub fn contours_to_labels(
+    geometry: &Geometry,
+    contours: &[Contour],
+) -> Result<LabelVolume, CoreError> {
     geometry.validate()?;
     let groups = rasterise_groups(geometry, contours.iter())?;
     let mut data = vec![0u16; geometry.len()];
@@ -257,7 +275,11 @@ pub fn contours_to_labels(geometry: &Geometry, contours: &[Contour]) -> Result<L
 
 /// One label's contours → a mask (the union of all its contours on any axis).
 /// Contours of other labels are ignored (but still validated).
-pub fn contours_to_mask(geometry: &Geometry, contours: &[Contour], label: u16) -> Result<Mask, CoreError> {
+pub fn contours_to_mask(
+    geometry: &Geometry,
+    contours: &[Contour],
+    label: u16,
+) -> Result<Mask, CoreError> {
     geometry.validate()?;
     for c in contours {
         validate_contour(geometry, c)?;
@@ -317,7 +339,13 @@ mod tests {
     }
 
     fn contour(axis: Axis, index: usize, label: u16, points: Vec<[f64; 2]>) -> Contour {
-        Contour::new(SliceRef { axis, index }, label, points, "t", "2024-01-01T00:00:00Z")
+        Contour::new(
+            SliceRef { axis, index },
+            label,
+            points,
+            "t",
+            "2024-01-01T00:00:00Z",
+        )
     }
 
     #[test]
@@ -369,9 +397,21 @@ mod tests {
     fn polygons_are_united_not_xored() {
         let a = [[0.0, 0.0], [3.0, 0.0], [3.0, 1.0], [0.0, 1.0]];
         let b = [[1.0, 0.0], [4.0, 0.0], [4.0, 1.0], [1.0, 1.0]];
-        assert_eq!(rasterize_polygons(&[&a, &b], 5, 1), vec![true, true, true, true, false]);
+        assert_eq!(
+            rasterize_polygons(&[&a, &b], 5, 1),
+            vec![true, true, true, true, false]
+        );
         // One self-overlapping polygon (a square walked twice) is even-odd: a hole.
-        let twice = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0], [0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]];
+        let twice = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [0.0, 1.0],
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [0.0, 1.0],
+        ];
         assert!(rasterize_polygons(&[&twice], 3, 1).iter().all(|&b| !b));
     }
 
@@ -379,7 +419,12 @@ mod tests {
     fn polygon_far_outside_is_clipped() {
         let big = [[-1e9, -1e9], [1e9, -1e9], [1e9, 1e9], [-1e9, 1e9]];
         assert!(rasterize_polygons(&[&big], 7, 3).iter().all(|&b| b));
-        let huge = [[-1e300, -1e300], [1e300, -1e300], [1e300, 1e300], [-1e300, 1e300]];
+        let huge = [
+            [-1e300, -1e300],
+            [1e300, -1e300],
+            [1e300, 1e300],
+            [-1e300, 1e300],
+        ];
         assert!(rasterize_polygons(&[&huge], 2, 2).iter().all(|&b| b));
         let tri = [[-1e300, -1e300], [1e300, -1e300], [0.0, 1e300]];
         assert!(rasterize_polygons(&[&tri], 3, 3).iter().all(|&b| b));
@@ -392,7 +437,10 @@ mod tests {
         let g = geom([6, 5, 4]);
         let full = |w: f64, h: f64| vec![[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]];
         // Label 2 on z=1 (whole slice) listed before label 1 on x=2 (whole slice).
-        let cs = vec![contour(Axis::Z, 1, 2, full(6.0, 5.0)), contour(Axis::X, 2, 1, full(5.0, 4.0))];
+        let cs = vec![
+            contour(Axis::Z, 1, 2, full(6.0, 5.0)),
+            contour(Axis::X, 2, 1, full(5.0, 4.0)),
+        ];
         let lv = contours_to_labels(&g, &cs).unwrap();
         for k in 0..4 {
             for j in 0..5 {
@@ -412,7 +460,12 @@ mod tests {
         assert_eq!(m.data().iter().filter(|&&b| b).count(), 5 * 4);
         assert!(m.get(2, 0, 1));
         // y slice: label 3 on y=4, a unit square at pixel (u=1, v=3) -> voxel (1, 4, 3).
-        let cs = vec![contour(Axis::Y, 4, 3, vec![[1.0, 3.0], [2.0, 3.0], [2.0, 4.0], [1.0, 4.0]])];
+        let cs = vec![contour(
+            Axis::Y,
+            4,
+            3,
+            vec![[1.0, 3.0], [2.0, 3.0], [2.0, 4.0], [1.0, 4.0]],
+        )];
         let lv = contours_to_labels(&g, &cs).unwrap();
         assert_eq!(lv.label_counts(), vec![(3, 1)]);
         assert_eq!(lv.get(1, 4, 3), 3);
@@ -425,7 +478,11 @@ mod tests {
         let out = contour(Axis::Y, 4, 1, sq.clone());
         assert!(matches!(
             contours_to_labels(&g, std::slice::from_ref(&out)),
-            Err(CoreError::SliceOutOfRange { index: 4, len: 4, .. })
+            Err(CoreError::SliceOutOfRange {
+                index: 4,
+                len: 4,
+                ..
+            })
         ));
         assert!(contours_to_mask(&g, &[out], 2).is_err());
         let nan = contour(Axis::Z, 0, 1, vec![[0.0, 0.0], [f64::NAN, 1.0], [1.0, 1.0]]);
@@ -438,8 +495,11 @@ mod tests {
     /// vertices and crossings land exactly on centre rows, centres and
     /// pixel corners, the hard cases of the half-open rule.
     fn dyadic_poly() -> impl Strategy<Value = Vec<[f64; 2]>> {
-        prop::collection::vec((-8i32..56, -8i32..48), 0..12)
-            .prop_map(|v| v.into_iter().map(|(a, b)| [a as f64 / 4.0, b as f64 / 4.0]).collect())
+        prop::collection::vec((-8i32..56, -8i32..48), 0..12).prop_map(|v| {
+            v.into_iter()
+                .map(|(a, b)| [a as f64 / 4.0, b as f64 / 4.0])
+                .collect()
+        })
     }
 
     fn float_poly() -> impl Strategy<Value = Vec<[f64; 2]>> {

@@ -40,8 +40,12 @@ pub enum SegmentMethod {
 
 impl SegmentMethod {
     /// Every method, in the order `--help` lists them.
-    pub const ALL: [SegmentMethod; 4] =
-        [SegmentMethod::Otsu, SegmentMethod::Rosin, SegmentMethod::KMeans, SegmentMethod::MultiOtsu];
+    pub const ALL: [SegmentMethod; 4] = [
+        SegmentMethod::Otsu,
+        SegmentMethod::Rosin,
+        SegmentMethod::KMeans,
+        SegmentMethod::MultiOtsu,
+    ];
 
     /// The CLI / API name.
     pub fn name(self) -> &'static str {
@@ -56,9 +60,14 @@ impl SegmentMethod {
     /// Parse a CLI / API name.
     pub fn parse(s: &str) -> Result<SegmentMethod, CoreError> {
         let s = s.trim().to_ascii_lowercase();
-        SegmentMethod::ALL.into_iter().find(|m| m.name() == s || (s == "k-means" && *m == SegmentMethod::KMeans)).ok_or_else(|| {
-            CoreError::Invalid(format!("unknown segmentation method '{s}' (expected otsu, rosin, kmeans or multi-otsu)"))
-        })
+        SegmentMethod::ALL
+            .into_iter()
+            .find(|m| m.name() == s || (s == "k-means" && *m == SegmentMethod::KMeans))
+            .ok_or_else(|| {
+                CoreError::Invalid(format!(
+                    "unknown segmentation method '{s}' (expected otsu, rosin, kmeans or multi-otsu)"
+                ))
+            })
     }
 }
 
@@ -93,7 +102,13 @@ pub struct SegmentParams {
 
 impl Default for SegmentParams {
     fn default() -> Self {
-        SegmentParams { method: SegmentMethod::Otsu, classes: 2, smooth_sigma: 0.0, largest_component: false, fill_holes: false }
+        SegmentParams {
+            method: SegmentMethod::Otsu,
+            classes: 2,
+            smooth_sigma: 0.0,
+            largest_component: false,
+            fill_holes: false,
+        }
     }
 }
 
@@ -101,20 +116,26 @@ impl SegmentParams {
     /// Check the parameters against each other; one-line errors.
     pub fn validate(&self) -> Result<(), CoreError> {
         match self.method {
-            SegmentMethod::Otsu | SegmentMethod::Rosin if self.classes != 2 => Err(CoreError::Invalid(format!(
-                "{} separates 2 classes; use kmeans or multi-otsu for {} classes",
-                self.method, self.classes
-            ))),
-            SegmentMethod::KMeans | SegmentMethod::MultiOtsu if !(2..=MAX_CLASSES).contains(&self.classes) => {
+            SegmentMethod::Otsu | SegmentMethod::Rosin if self.classes != 2 => {
+                Err(CoreError::Invalid(format!(
+                    "{} separates 2 classes; use kmeans or multi-otsu for {} classes",
+                    self.method, self.classes
+                )))
+            }
+            SegmentMethod::KMeans | SegmentMethod::MultiOtsu
+                if !(2..=MAX_CLASSES).contains(&self.classes) =>
+            {
                 Err(CoreError::Invalid(format!(
                     "{} needs 2 to {MAX_CLASSES} classes, not {}",
                     self.method, self.classes
                 )))
             }
-            _ if !(self.smooth_sigma.is_finite() && self.smooth_sigma >= 0.0) => Err(CoreError::Invalid(format!(
-                "smoothing sigma must be a finite number >= 0, not {}",
-                self.smooth_sigma
-            ))),
+            _ if !(self.smooth_sigma.is_finite() && self.smooth_sigma >= 0.0) => {
+                Err(CoreError::Invalid(format!(
+                    "smoothing sigma must be a finite number >= 0, not {}",
+                    self.smooth_sigma
+                )))
+            }
             _ => Ok(()),
         }
     }
@@ -173,15 +194,24 @@ fn thresholds_of(v: &AnyVolume, p: &SegmentParams) -> Result<(Vec<f64>, Binning)
     let h = Histogram::of_volume(v, binning).map_err(err)?;
     let found = h.nonempty_bins();
     if found < p.classes {
-        return Err(err(ThresholdError::TooFewValues { classes: p.classes, found }));
+        return Err(err(ThresholdError::TooFewValues {
+            classes: p.classes,
+            found,
+        }));
     }
     let t = match p.method {
         SegmentMethod::Otsu => vec![threshold::otsu(&h).map_err(err)?],
-        SegmentMethod::Rosin => vec![threshold::rosin(&h, RosinEnd::FirstEmptyAfterLast).map_err(err)?.threshold],
+        SegmentMethod::Rosin => vec![
+            threshold::rosin(&h, RosinEnd::FirstEmptyAfterLast)
+                .map_err(err)?
+                .threshold,
+        ],
         SegmentMethod::MultiOtsu => threshold::multi_otsu(&h, p.classes).map_err(err)?,
         SegmentMethod::KMeans => {
             let (values, counts) = threshold::distinct_values(v).map_err(err)?;
-            threshold::kmeans_exact(&values, &counts, p.classes).map_err(err)?.thresholds
+            threshold::kmeans_exact(&values, &counts, p.classes)
+                .map_err(err)?
+                .thresholds
         }
     };
     Ok((t, binning))
@@ -189,13 +219,31 @@ fn thresholds_of(v: &AnyVolume, p: &SegmentParams) -> Result<(Vec<f64>, Binning)
 
 /// Smooth and round back to the volume's own type (f32 stays f32).
 fn smooth_same_type(v: &AnyVolume, sigma: f64) -> Result<AnyVolume, CoreError> {
-    fn back<T: Voxel>(s: Volume<f32>, lo: f32, hi: f32, cast: impl Fn(f32) -> T + Sync) -> Volume<T> {
+    fn back<T: Voxel>(
+        s: Volume<f32>,
+        lo: f32,
+        hi: f32,
+        cast: impl Fn(f32) -> T + Sync,
+    ) -> Volume<T> {
         s.map(|x| cast(x.round().clamp(lo, hi)))
     }
     Ok(match v {
-        AnyVolume::U8(x) => AnyVolume::U8(back(morph::gaussian_smooth(x, sigma)?, 0.0, 255.0, |f| f as u8)),
-        AnyVolume::U16(x) => AnyVolume::U16(back(morph::gaussian_smooth(x, sigma)?, 0.0, 65535.0, |f| f as u16)),
-        AnyVolume::I16(x) => AnyVolume::I16(back(morph::gaussian_smooth(x, sigma)?, -32768.0, 32767.0, |f| f as i16)),
+        AnyVolume::U8(x) => {
+            AnyVolume::U8(back(morph::gaussian_smooth(x, sigma)?, 0.0, 255.0, |f| {
+                f as u8
+            }))
+        }
+        AnyVolume::U16(x) => {
+            AnyVolume::U16(back(morph::gaussian_smooth(x, sigma)?, 0.0, 65535.0, |f| {
+                f as u16
+            }))
+        }
+        AnyVolume::I16(x) => AnyVolume::I16(back(
+            morph::gaussian_smooth(x, sigma)?,
+            -32768.0,
+            32767.0,
+            |f| f as i16,
+        )),
         AnyVolume::F32(x) => AnyVolume::F32(morph::gaussian_smooth(x, sigma)?),
     })
 }
@@ -225,25 +273,40 @@ pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation
     };
     if p.largest_component {
         let keep = morph::largest_component(&labels.map(|l| l > 0), Connectivity::Face);
-        labels.data_mut().par_iter_mut().zip(keep.data().par_iter()).for_each(|(l, &k)| {
-            if !k {
-                *l = 0;
-            }
-        });
+        labels
+            .data_mut()
+            .par_iter_mut()
+            .zip(keep.data().par_iter())
+            .for_each(|(l, &k)| {
+                if !k {
+                    *l = 0;
+                }
+            });
     }
     if p.fill_holes {
         for l in 1..p.classes as u16 {
             let filled = morph::fill_holes(&labels.map(|x| x >= l), Connectivity::Face);
-            labels.data_mut().par_iter_mut().zip(filled.data().par_iter()).for_each(|(x, &f)| {
-                if f && *x < l {
-                    *x = l;
-                }
-            });
+            labels
+                .data_mut()
+                .par_iter_mut()
+                .zip(filled.data().par_iter())
+                .for_each(|(x, &f)| {
+                    if f && *x < l {
+                        *x = l;
+                    }
+                });
         }
     }
     let counts = labels.label_counts();
-    let voxels = (1..p.classes as u16).map(|l| counts.iter().find(|c| c.0 == l).map_or(0, |c| c.1)).collect();
-    Ok(Segmentation { labels, thresholds, binning, voxels })
+    let voxels = (1..p.classes as u16)
+        .map(|l| counts.iter().find(|c| c.0 == l).map_or(0, |c| c.1))
+        .collect();
+    Ok(Segmentation {
+        labels,
+        thresholds,
+        binning,
+        voxels,
+    })
 }
 
 #[cfg(test)]
@@ -259,8 +322,18 @@ mod tests {
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
-                    let d = [i, j, k].iter().map(|&c| (c as f64 - 11.5).powi(2)).sum::<f64>().sqrt();
-                    let x = if d < 4.0 { 40 } else if d < 8.0 { 200 } else { 20 + ((i * 7 + j * 3 + k) % 10) as u8 };
+                    let d = [i, j, k]
+                        .iter()
+                        .map(|&c| (c as f64 - 11.5).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    let x = if d < 4.0 {
+                        40
+                    } else if d < 8.0 {
+                        200
+                    } else {
+                        20 + ((i * 7 + j * 3 + k) % 10) as u8
+                    };
                     v.set(i, j, k, x);
                 }
             }
@@ -280,7 +353,11 @@ mod tests {
         let shell = plain.voxels[0];
         let clean = segment_detailed(
             &v,
-            &SegmentParams { largest_component: true, fill_holes: true, ..Default::default() },
+            &SegmentParams {
+                largest_component: true,
+                fill_holes: true,
+                ..Default::default()
+            },
         )
         .unwrap();
         // The stray voxel is gone and the cavity is filled.
@@ -297,28 +374,80 @@ mod tests {
     #[test]
     fn three_classes_and_bad_parameters() {
         let v = ball();
-        let p = SegmentParams { method: SegmentMethod::MultiOtsu, classes: 3, ..Default::default() };
+        let p = SegmentParams {
+            method: SegmentMethod::MultiOtsu,
+            classes: 3,
+            ..Default::default()
+        };
         let s = segment_detailed(&v, &p).unwrap();
         assert_eq!(s.thresholds.len(), 2);
         assert_eq!(s.labels.get(12, 12, 12), 1); // cavity (40) above the background
         assert_eq!(s.labels.get(12, 12, 5), 2); // shell
-        let k = segment(&v, &SegmentParams { method: SegmentMethod::KMeans, classes: 3, ..Default::default() }).unwrap();
+        let k = segment(
+            &v,
+            &SegmentParams {
+                method: SegmentMethod::KMeans,
+                classes: 3,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(k.get(12, 12, 5), 2);
-        assert!(segment(&v, &SegmentParams { classes: 3, ..Default::default() }).is_err());
-        assert!(segment(&v, &SegmentParams { method: SegmentMethod::KMeans, classes: 7, ..Default::default() }).is_err());
-        assert!(segment(&v, &SegmentParams { smooth_sigma: -1.0, ..Default::default() }).is_err());
+        assert!(
+            segment(
+                &v,
+                &SegmentParams {
+                    classes: 3,
+                    ..Default::default()
+                }
+            )
+            .is_err()
+        );
+        assert!(
+            segment(
+                &v,
+                &SegmentParams {
+                    method: SegmentMethod::KMeans,
+                    classes: 7,
+                    ..Default::default()
+                }
+            )
+            .is_err()
+        );
+        assert!(
+            segment(
+                &v,
+                &SegmentParams {
+                    smooth_sigma: -1.0,
+                    ..Default::default()
+                }
+            )
+            .is_err()
+        );
         assert!(SegmentMethod::parse("watershed").is_err());
-        assert_eq!(SegmentMethod::parse("multi-otsu").unwrap(), SegmentMethod::MultiOtsu);
+        assert_eq!(
+            SegmentMethod::parse("multi-otsu").unwrap(),
+            SegmentMethod::MultiOtsu
+        );
         let g = Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let flat = AnyVolume::U8(Volume::filled(g, 9));
-        let e = segment(&flat, &SegmentParams::default()).unwrap_err().to_string();
+        let e = segment(&flat, &SegmentParams::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("only 1 distinct value"), "{e}");
     }
 
     #[test]
     fn smoothing_keeps_the_type_and_removes_the_speck() {
         let v = ball();
-        let s = segment_detailed(&v, &SegmentParams { smooth_sigma: 0.6, ..Default::default() }).unwrap();
+        let s = segment_detailed(
+            &v,
+            &SegmentParams {
+                smooth_sigma: 0.6,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         assert_eq!(s.binning, Binning::Native);
         // One bright voxel in a dark corner is smoothed below the threshold.
         assert_eq!(s.labels.get(0, 0, 0), 0);

@@ -46,7 +46,9 @@ impl Axis {
             "x" => Ok(Axis::X),
             "y" => Ok(Axis::Y),
             "z" => Ok(Axis::Z),
-            other => Err(CoreError::Invalid(format!("unknown axis '{other}' (expected x, y or z)"))),
+            other => Err(CoreError::Invalid(format!(
+                "unknown axis '{other}' (expected x, y or z)"
+            ))),
         }
     }
 

@@ -39,7 +39,10 @@ pub struct StapleParams {
 
 impl Default for StapleParams {
     fn default() -> Self {
-        StapleParams { max_iterations: 10_000, tolerance: 1e-14 }
+        StapleParams {
+            max_iterations: 10_000,
+            tolerance: 1e-14,
+        }
     }
 }
 
@@ -79,24 +82,32 @@ fn patterns(raters: &[&Mask]) -> Volume<u32> {
     let g = raters[0].geometry().clone();
     let n = g.len();
     let mut out = vec![0u32; n];
-    out.par_chunks_mut(1 << 16).enumerate().for_each(|(c, chunk)| {
-        let start = c << 16;
-        for (j, r) in raters.iter().enumerate() {
-            let d = &r.data()[start..start + chunk.len()];
-            for (o, &b) in chunk.iter_mut().zip(d) {
-                *o |= (b as u32) << j;
+    out.par_chunks_mut(1 << 16)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let start = c << 16;
+            for (j, r) in raters.iter().enumerate() {
+                let d = &r.data()[start..start + chunk.len()];
+                for (o, &b) in chunk.iter_mut().zip(d) {
+                    *o |= (b as u32) << j;
+                }
             }
-        }
-    });
+        });
     Volume::from_vec(g, out).expect("same geometry")
 }
 
 fn check(raters: &[&Mask]) -> Result<(), CoreError> {
     if raters.len() < 2 {
-        return Err(CoreError::Invalid(format!("STAPLE needs at least 2 raters, got {}", raters.len())));
+        return Err(CoreError::Invalid(format!(
+            "STAPLE needs at least 2 raters, got {}",
+            raters.len()
+        )));
     }
     if raters.len() > MAX_RATERS {
-        return Err(CoreError::Invalid(format!("STAPLE takes at most {MAX_RATERS} raters, got {}", raters.len())));
+        return Err(CoreError::Invalid(format!(
+            "STAPLE takes at most {MAX_RATERS} raters, got {}",
+            raters.len()
+        )));
     }
     for r in &raters[1..] {
         raters[0].geometry().ensure_same_grid(r.geometry())?;
@@ -177,7 +188,11 @@ pub fn staple(raters: &[&Mask], params: StapleParams) -> Result<Staple, CoreErro
             *wp = if den > 0.0 { num / den } else { 0.0 };
         }
         if let Some((lp, lq)) = &last {
-            let small = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y) * (x - y) <= params.tolerance);
+            let small = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .all(|(x, y)| (x - y) * (x - y) <= params.tolerance)
+            };
             if small(&sens, lp) && small(&spec, lq) {
                 converged = true;
                 break;
@@ -192,7 +207,15 @@ pub fn staple(raters: &[&Mask], params: StapleParams) -> Result<Staple, CoreErro
     }
     let fg: Vec<bool> = w.iter().map(|&x| x > 0.5).collect();
     let consensus = pat.map(|p| fg[p as usize]);
-    Ok(Staple { sensitivity: sens, specificity: spec, prior, iterations, converged, posterior: w, consensus })
+    Ok(Staple {
+        sensitivity: sens,
+        specificity: spec,
+        prior,
+        iterations,
+        converged,
+        posterior: w,
+        consensus,
+    })
 }
 
 /// Voxels marked by more than half of the raters (ties are background).
@@ -206,11 +229,19 @@ pub fn majority_vote(raters: &[&Mask]) -> Result<Mask, CoreError> {
 /// STAPLE of label volumes, one binary run per label present in any rater;
 /// the consensus labels are painted in ascending order, so a higher (inner)
 /// label overwrites a lower one where both consensus masks hold.
-pub fn staple_labels(raters: &[&LabelVolume], params: StapleParams) -> Result<(LabelVolume, Vec<(u16, Staple)>), CoreError> {
+pub fn staple_labels(
+    raters: &[&LabelVolume],
+    params: StapleParams,
+) -> Result<(LabelVolume, Vec<(u16, Staple)>), CoreError> {
     if raters.is_empty() {
-        return Err(CoreError::Invalid("STAPLE needs at least 2 raters, got 0".into()));
+        return Err(CoreError::Invalid(
+            "STAPLE needs at least 2 raters, got 0".into(),
+        ));
     }
-    let mut labels: Vec<u16> = raters.iter().flat_map(|r| r.label_counts().into_iter().map(|c| c.0)).collect();
+    let mut labels: Vec<u16> = raters
+        .iter()
+        .flat_map(|r| r.label_counts().into_iter().map(|c| c.0))
+        .collect();
     labels.sort_unstable();
     labels.dedup();
     let mut out = LabelVolume::zeros(raters[0].geometry().clone());
@@ -219,11 +250,14 @@ pub fn staple_labels(raters: &[&LabelVolume], params: StapleParams) -> Result<(L
         let masks: Vec<Mask> = raters.iter().map(|r| r.mask_of(l)).collect();
         let refs: Vec<&Mask> = masks.iter().collect();
         let s = staple(&refs, params)?;
-        out.data_mut().par_iter_mut().zip(s.consensus.data().par_iter()).for_each(|(o, &c)| {
-            if c {
-                *o = l;
-            }
-        });
+        out.data_mut()
+            .par_iter_mut()
+            .zip(s.consensus.data().par_iter())
+            .for_each(|(o, &c)| {
+                if c {
+                    *o = l;
+                }
+            });
         per.push((l, s));
     }
     Ok((out, per))
@@ -242,7 +276,9 @@ mod tests {
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
-                    let d = ((i as f64 - c) / r[0]).powi(2) + ((j as f64 - c) / r[1]).powi(2) + ((k as f64 - c) / r[2]).powi(2);
+                    let d = ((i as f64 - c) / r[0]).powi(2)
+                        + ((j as f64 - c) / r[1]).powi(2)
+                        + ((k as f64 - c) / r[2]).powi(2);
                     m.set(i, j, k, d <= 1.0);
                 }
             }
@@ -252,7 +288,11 @@ mod tests {
 
     fn flip(truth: &Mask, p: f64, q: f64, seed: u64) -> Mask {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let data = truth.data().iter().map(|&t| if t { rng.gen_bool(p) } else { !rng.gen_bool(q) }).collect();
+        let data = truth
+            .data()
+            .iter()
+            .map(|&t| if t { rng.gen_bool(p) } else { !rng.gen_bool(q) })
+            .collect();
         Mask::from_vec(truth.geometry().clone(), data).unwrap()
     }
 
@@ -270,13 +310,25 @@ mod tests {
     fn recovers_known_sensitivity_and_specificity() {
         let truth = ellipsoid(48, [18.0, 14.0, 10.0]);
         let pq = [(0.95, 0.99), (0.80, 0.97), (0.90, 0.90), (0.70, 0.995)];
-        let raters: Vec<Mask> = pq.iter().enumerate().map(|(s, &(p, q))| flip(&truth, p, q, 11 + s as u64)).collect();
+        let raters: Vec<Mask> = pq
+            .iter()
+            .enumerate()
+            .map(|(s, &(p, q))| flip(&truth, p, q, 11 + s as u64))
+            .collect();
         let refs: Vec<&Mask> = raters.iter().collect();
         let s = staple(&refs, StapleParams::default()).unwrap();
         assert!(s.converged);
         for (j, &(p, q)) in pq.iter().enumerate() {
-            assert!((s.sensitivity[j] - p).abs() < 0.02, "rater {j}: p {} vs {p}", s.sensitivity[j]);
-            assert!((s.specificity[j] - q).abs() < 0.02, "rater {j}: q {} vs {q}", s.specificity[j]);
+            assert!(
+                (s.sensitivity[j] - p).abs() < 0.02,
+                "rater {j}: p {} vs {p}",
+                s.sensitivity[j]
+            );
+            assert!(
+                (s.specificity[j] - q).abs() < 0.02,
+                "rater {j}: q {} vs {q}",
+                s.specificity[j]
+            );
         }
         assert!(dice(&s.consensus, &truth) > 0.95);
     }
@@ -284,7 +336,11 @@ mod tests {
     #[test]
     fn weighs_raters_by_their_quality_and_beats_majority_vote() {
         let truth = ellipsoid(40, [12.0, 9.0, 7.0]);
-        let raters = [flip(&truth, 0.97, 0.998, 1), flip(&truth, 0.75, 0.97, 2), flip(&truth, 0.70, 0.98, 3)];
+        let raters = [
+            flip(&truth, 0.97, 0.998, 1),
+            flip(&truth, 0.75, 0.97, 2),
+            flip(&truth, 0.70, 0.98, 3),
+        ];
         let refs: Vec<&Mask> = raters.iter().collect();
         let s = staple(&refs, StapleParams::default()).unwrap();
         let mv = majority_vote(&refs).unwrap();

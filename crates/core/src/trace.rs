@@ -24,10 +24,18 @@ const STEP: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
 ///
 /// Panics if `mask.len() != width * height` (a programming error).
 pub fn mask_polygons(mask: &[bool], width: usize, height: usize) -> Vec<Vec<[f64; 2]>> {
-    assert_eq!(mask.len(), width * height, "mask length must be width * height");
+    assert_eq!(
+        mask.len(),
+        width * height,
+        "mask length must be width * height"
+    );
     let cw = width + 1;
     let at = |u: i64, v: i64| -> bool {
-        u >= 0 && v >= 0 && (u as usize) < width && (v as usize) < height && mask[u as usize + width * v as usize]
+        u >= 0
+            && v >= 0
+            && (u as usize) < width
+            && (v as usize) < height
+            && mask[u as usize + width * v as usize]
     };
     // Outgoing crack edges per corner, one bit per direction.
     let mut out = vec![0u8; cw * (height + 1)];
@@ -150,14 +158,20 @@ mod tests {
     fn mask_from(rows: &[&str]) -> (Vec<bool>, usize, usize) {
         let h = rows.len();
         let w = rows[0].len();
-        let m = rows.iter().flat_map(|r| r.chars().map(|c| c == '#')).collect();
+        let m = rows
+            .iter()
+            .flat_map(|r| r.chars().map(|c| c == '#'))
+            .collect();
         (m, w, h)
     }
 
     #[test]
     fn single_pixel_is_a_unit_square() {
         let p = mask_polygons(&[true], 1, 1);
-        assert_eq!(p, vec![vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]]);
+        assert_eq!(
+            p,
+            vec![vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]]
+        );
     }
 
     #[test]

@@ -212,7 +212,10 @@ impl<T: Voxel> Volume<T> {
                     (lo.min(x), hi.max(x))
                 },
             )
-            .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+            .reduce(
+                || (f64::INFINITY, f64::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            )
     }
 }
 
@@ -307,13 +310,14 @@ impl AnyVolume {
             AnyVolume::U16(v) => Ok(v.clone()),
             AnyVolume::I16(v) => {
                 if v.data().par_iter().any(|&x| x < 0) {
-                    return Err(CoreError::Invalid("label volume has negative values".into()));
+                    return Err(CoreError::Invalid(
+                        "label volume has negative values".into(),
+                    ));
                 }
                 Ok(v.map(|x| x as u16))
             }
             AnyVolume::F32(v) => {
-                if v
-                    .data()
+                if v.data()
                     .par_iter()
                     .any(|&x| !(x.is_finite() && (0.0..=65535.0).contains(&x) && x.fract() == 0.0))
                 {
@@ -352,7 +356,10 @@ impl<T: Copy> SliceView<'_, T> {
     /// Pixel `(u, v)`; panics when out of the slice, like slice indexing.
     #[inline]
     pub fn get(&self, u: usize, v: usize) -> T {
-        assert!(u < self.width && v < self.height, "pixel ({u}, {v}) outside the slice");
+        assert!(
+            u < self.width && v < self.height,
+            "pixel ({u}, {v}) outside the slice"
+        );
         self.data[self.base + u * self.stride_u + v * self.stride_v]
     }
 

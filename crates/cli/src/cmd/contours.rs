@@ -138,7 +138,9 @@ fn extract(input: &Path, out: &Path, axis: Axis, every: usize, author: &str) -> 
     let slices: Vec<Vec<u16>> = (0..n)
         .map(|k| labels.slice(axis, k))
         .collect::<Result<_, _>>()?;
-    let non_empty: Vec<usize> = (0..n).filter(|&k| slices[k].iter().any(|&l| l != 0)).collect();
+    let non_empty: Vec<usize> = (0..n)
+        .filter(|&k| slices[k].iter().any(|&l| l != 0))
+        .collect();
     let created = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
     let mut file = ContourFile::new(labels.geometry().clone());
     let present: BTreeSet<u16> = labels.label_counts().into_iter().map(|(l, _)| l).collect();
@@ -163,7 +165,8 @@ fn extract(input: &Path, out: &Path, axis: Axis, every: usize, author: &str) -> 
                 .into_iter()
                 .filter(|p| signed_area(p) > 0.0)
             {
-                file.contours.push(Contour::new(slice, label, points, author, &created));
+                file.contours
+                    .push(Contour::new(slice, label, points, author, &created));
             }
         }
     }

@@ -47,7 +47,11 @@ pub struct Histogram {
 /// them (`lo + i * step`, last edge set to `hi`); a constant range is widened
 /// to `[lo - 0.5, hi + 0.5]` as `numpy.histogram` does.
 pub fn uniform_edges(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    let (lo, hi) = if lo == hi { (lo - 0.5, hi + 0.5) } else { (lo, hi) };
+    let (lo, hi) = if lo == hi {
+        (lo - 0.5, hi + 0.5)
+    } else {
+        (lo, hi)
+    };
     let step = (hi - lo) / n as f64;
     let mut e: Vec<f64> = (0..=n).map(|i| i as f64 * step + lo).collect();
     e[n] = hi;
@@ -80,10 +84,21 @@ impl Histogram {
     /// A native histogram from counts of the integer values
     /// `first_value, first_value + 1, ...` (the `histogram_native` records of
     /// the references). Leading and trailing empty bins are kept as given.
-    pub fn native_from_counts(first_value: i64, counts: Vec<u64>) -> Result<Histogram, ThresholdError> {
-        let first = counts.iter().position(|&c| c > 0).ok_or(ThresholdError::Empty)?;
-        let last = counts.iter().rposition(|&c| c > 0).ok_or(ThresholdError::Empty)?;
-        let centres = (0..counts.len()).map(|i| (first_value + i as i64) as f64).collect();
+    pub fn native_from_counts(
+        first_value: i64,
+        counts: Vec<u64>,
+    ) -> Result<Histogram, ThresholdError> {
+        let first = counts
+            .iter()
+            .position(|&c| c > 0)
+            .ok_or(ThresholdError::Empty)?;
+        let last = counts
+            .iter()
+            .rposition(|&c| c > 0)
+            .ok_or(ThresholdError::Empty)?;
+        let centres = (0..counts.len())
+            .map(|i| (first_value + i as i64) as f64)
+            .collect();
         Ok(Histogram {
             counts,
             centres,
@@ -97,8 +112,14 @@ impl Histogram {
     /// A uniform histogram from its counts and first/last edge (the
     /// `histogram_float256` records). The data range is taken to be the edges
     /// (which it is for any non-constant volume).
-    pub fn uniform_from_counts(first_edge: f64, last_edge: f64, counts: Vec<u64>) -> Result<Histogram, ThresholdError> {
-        if counts.is_empty() || !(first_edge.is_finite() && last_edge.is_finite() && first_edge < last_edge) {
+    pub fn uniform_from_counts(
+        first_edge: f64,
+        last_edge: f64,
+        counts: Vec<u64>,
+    ) -> Result<Histogram, ThresholdError> {
+        if counts.is_empty()
+            || !(first_edge.is_finite() && last_edge.is_finite() && first_edge < last_edge)
+        {
             return Err(ThresholdError::Invalid(format!(
                 "bad uniform histogram: {} bins over [{first_edge}, {last_edge}]",
                 counts.len()
@@ -142,7 +163,9 @@ impl Histogram {
     /// Re-bin a native histogram into `n` uniform bins over its `[min, max]`.
     fn rebin_uniform(&self, n: usize) -> Result<Histogram, ThresholdError> {
         if n == 0 {
-            return Err(ThresholdError::Invalid("a histogram needs at least one bin".into()));
+            return Err(ThresholdError::Invalid(
+                "a histogram needs at least one bin".into(),
+            ));
         }
         let edges = uniform_edges(self.min, self.max, n);
         let mut counts = vec![0u64; n];
@@ -205,13 +228,24 @@ fn integer_histogram(v: &AnyVolume) -> Result<Histogram, ThresholdError> {
     let (offset, full) = match v {
         AnyVolume::U8(x) => (0i64, full_counts(x.data(), 256, |v| v as usize)),
         AnyVolume::U16(x) => (0, full_counts(x.data(), 65536, |v| v as usize)),
-        AnyVolume::I16(x) => (-32768, full_counts(x.data(), 65536, |v| (v as i32 + 32768) as usize)),
+        AnyVolume::I16(x) => (
+            -32768,
+            full_counts(x.data(), 65536, |v| (v as i32 + 32768) as usize),
+        ),
         AnyVolume::F32(_) => {
-            return Err(ThresholdError::Invalid("native bins need an integer volume".into()));
+            return Err(ThresholdError::Invalid(
+                "native bins need an integer volume".into(),
+            ));
         }
     };
-    let first = full.iter().position(|&c| c > 0).ok_or(ThresholdError::Empty)?;
-    let last = full.iter().rposition(|&c| c > 0).ok_or(ThresholdError::Empty)?;
+    let first = full
+        .iter()
+        .position(|&c| c > 0)
+        .ok_or(ThresholdError::Empty)?;
+    let last = full
+        .iter()
+        .rposition(|&c| c > 0)
+        .ok_or(ThresholdError::Empty)?;
     Histogram::native_from_counts(offset + first as i64, full[first..=last].to_vec())
 }
 
@@ -240,7 +274,9 @@ fn full_counts<T: Voxel>(data: &[T], n: usize, index: impl Fn(T) -> usize + Sync
 /// Uniform bins of a float volume (values taken as f64, as numpy does).
 fn uniform_of_floats(v: &Volume<f32>, n: usize) -> Result<Histogram, ThresholdError> {
     if n == 0 {
-        return Err(ThresholdError::Invalid("a histogram needs at least one bin".into()));
+        return Err(ThresholdError::Invalid(
+            "a histogram needs at least one bin".into(),
+        ));
     }
     if v.data().par_iter().any(|x| !x.is_finite()) {
         return Err(ThresholdError::NonFinite);
@@ -329,8 +365,13 @@ pub fn distinct_values(v: &AnyVolume) -> Result<(Vec<f64>, Vec<u64>), ThresholdE
         }
         _ => {
             let h = integer_histogram(v)?;
-            let (counts, vals): (Vec<u64>, Vec<f64>) =
-                h.counts.iter().zip(&h.centres).filter(|(c, _)| **c > 0).map(|(&c, &x)| (c, x)).unzip();
+            let (counts, vals): (Vec<u64>, Vec<f64>) = h
+                .counts
+                .iter()
+                .zip(&h.centres)
+                .filter(|(c, _)| **c > 0)
+                .map(|(&c, &x)| (c, x))
+                .unzip();
             Ok((vals, counts))
         }
     }
@@ -372,7 +413,10 @@ mod tests {
     fn distinct_values_of_floats() {
         let g = Geometry::new([4, 1, 1], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let v = AnyVolume::F32(Volume::from_vec(g.clone(), vec![2.5, -1.0, 2.5, 0.0]).unwrap());
-        assert_eq!(distinct_values(&v).unwrap(), (vec![-1.0, 0.0, 2.5], vec![1, 1, 2]));
+        assert_eq!(
+            distinct_values(&v).unwrap(),
+            (vec![-1.0, 0.0, 2.5], vec![1, 1, 2])
+        );
         let bad = AnyVolume::F32(Volume::from_vec(g, vec![f32::NAN, 0.0, 1.0, 2.0]).unwrap());
         assert_eq!(distinct_values(&bad), Err(ThresholdError::NonFinite));
         assert_eq!(count_above(&v, 0.0), (2, 3));

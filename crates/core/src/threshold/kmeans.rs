@@ -8,8 +8,8 @@
 //! the range), which can stop at a local optimum; it is kept for comparison.
 //! The thresholds are the midpoints between neighbouring centres; a voxel is
 //! in cluster `#{t : v > t}`.
-use super::partition::{optimal_partition, Prefix};
 use super::ThresholdError;
+use super::partition::{Prefix, optimal_partition};
 
 /// A k-means clustering of intensities.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,10 +28,14 @@ pub struct KMeans {
 
 fn check(values: &[f64], counts: &[u64], k: usize) -> Result<(), ThresholdError> {
     if !(2..=16).contains(&k) {
-        return Err(ThresholdError::Invalid(format!("k-means needs 2 to 16 clusters, not {k}")));
+        return Err(ThresholdError::Invalid(format!(
+            "k-means needs 2 to 16 clusters, not {k}"
+        )));
     }
     if values.len() != counts.len() {
-        return Err(ThresholdError::Invalid("values and counts differ in length".into()));
+        return Err(ThresholdError::Invalid(
+            "values and counts differ in length".into(),
+        ));
     }
     if values.is_empty() {
         return Err(ThresholdError::Empty);
@@ -40,10 +44,15 @@ fn check(values: &[f64], counts: &[u64], k: usize) -> Result<(), ThresholdError>
         return Err(ThresholdError::NonFinite);
     }
     if values.windows(2).any(|w| w[0] >= w[1]) || counts.contains(&0) {
-        return Err(ThresholdError::Invalid("values must be distinct, ascending, with counts > 0".into()));
+        return Err(ThresholdError::Invalid(
+            "values must be distinct, ascending, with counts > 0".into(),
+        ));
     }
     if values.len() < k {
-        return Err(ThresholdError::TooFewValues { classes: k, found: values.len() });
+        return Err(ThresholdError::TooFewValues {
+            classes: k,
+            found: values.len(),
+        });
     }
     Ok(())
 }
@@ -52,7 +61,9 @@ fn inertia(values: &[f64], weights: &[f64], centres: &[f64], ends: &[usize]) -> 
     let mut start = 0;
     let mut total = 0.0;
     for (c, &e) in centres.iter().zip(ends) {
-        total += (start..e).map(|i| weights[i] * (values[i] - c) * (values[i] - c)).sum::<f64>();
+        total += (start..e)
+            .map(|i| weights[i] * (values[i] - c) * (values[i] - c))
+            .sum::<f64>();
         start = e;
     }
     total
@@ -85,18 +96,28 @@ pub fn kmeans_exact(values: &[f64], counts: &[u64], k: usize) -> Result<KMeans, 
 /// a value goes to the nearest centre (an exact tie to the lower one); an
 /// empty cluster keeps its centre; the loop stops when no assignment changes
 /// (or after `max_iter` rounds).
-pub fn kmeans_lloyd(values: &[f64], counts: &[u64], k: usize, max_iter: usize) -> Result<KMeans, ThresholdError> {
+pub fn kmeans_lloyd(
+    values: &[f64],
+    counts: &[u64],
+    k: usize,
+    max_iter: usize,
+) -> Result<KMeans, ThresholdError> {
     check(values, counts, k)?;
     let weights: Vec<f64> = counts.iter().map(|&c| c as f64).collect();
     let (lo, hi) = (values[0], values[values.len() - 1]);
-    let mut c: Vec<f64> = (0..k).map(|j| lo + (j as f64 + 0.5) * (hi - lo) / k as f64).collect();
+    let mut c: Vec<f64> = (0..k)
+        .map(|j| lo + (j as f64 + 0.5) * (hi - lo) / k as f64)
+        .collect();
     let mut assign: Option<Vec<usize>> = None;
     let mut iterations = 0;
     for it in 1..=max_iter.max(1) {
         iterations = it;
         let mids: Vec<f64> = c.windows(2).map(|w| (w[0] + w[1]) / 2.0).collect();
         // Values are sorted, so clusters are contiguous: cluster = #mids < v.
-        let new: Vec<usize> = values.iter().map(|&v| mids.iter().filter(|&&m| m < v).count()).collect();
+        let new: Vec<usize> = values
+            .iter()
+            .map(|&v| mids.iter().filter(|&&m| m < v).count())
+            .collect();
         if assign.as_ref() == Some(&new) {
             break;
         }
@@ -115,8 +136,13 @@ pub fn kmeans_lloyd(values: &[f64], counts: &[u64], k: usize, max_iter: usize) -
         assign = Some(new);
     }
     let assign = assign.unwrap_or_default();
-    let ends: Vec<usize> = (0..k).map(|j| assign.iter().filter(|&&a| a <= j).count()).collect();
-    let last_values = ends.iter().map(|&e| if e > 0 { values[e - 1] } else { f64::NAN }).collect();
+    let ends: Vec<usize> = (0..k)
+        .map(|j| assign.iter().filter(|&&a| a <= j).count())
+        .collect();
+    let last_values = ends
+        .iter()
+        .map(|&e| if e > 0 { values[e - 1] } else { f64::NAN })
+        .collect();
     let mut total = 0.0;
     for (i, &a) in assign.iter().enumerate() {
         total += weights[i] * (values[i] - c[a]) * (values[i] - c[a]);
@@ -144,6 +170,9 @@ mod tests {
         let l = kmeans_lloyd(&v, &c, 2, 1000).unwrap();
         assert!((l.thresholds[0] - 110.9).abs() < 1e-9);
         assert!(l.inertia > e.inertia);
-        assert!(matches!(kmeans_exact(&v[..1], &c[..1], 2), Err(ThresholdError::TooFewValues { .. })));
+        assert!(matches!(
+            kmeans_exact(&v[..1], &c[..1], 2),
+            Err(ThresholdError::TooFewValues { .. })
+        ));
     }
 }

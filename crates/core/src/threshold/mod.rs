@@ -25,12 +25,12 @@ mod partition;
 pub mod rosin;
 pub mod triangle;
 
-pub use histogram::{count_above, distinct_values, Binning, Histogram};
+pub use histogram::{Binning, Histogram, count_above, distinct_values};
 pub use isodata::isodata;
-pub use kmeans::{kmeans_exact, kmeans_lloyd, KMeans};
+pub use kmeans::{KMeans, kmeans_exact, kmeans_lloyd};
 pub use multi_otsu::{multi_otsu, multi_otsu_objective};
 pub use otsu::{otsu, otsu_bin};
-pub use rosin::{rosin, Rosin, RosinEnd};
+pub use rosin::{Rosin, RosinEnd, rosin};
 pub use triangle::triangle;
 
 use thiserror::Error;
@@ -42,7 +42,9 @@ pub enum ThresholdError {
     #[error("the volume is empty")]
     Empty,
     /// Fewer distinct values (or non-empty bins) than classes asked for.
-    #[error("cannot split into {classes} classes: the volume has only {found} distinct value(s) after binning")]
+    #[error(
+        "cannot split into {classes} classes: the volume has only {found} distinct value(s) after binning"
+    )]
     TooFewValues {
         /// Classes asked for.
         classes: usize,

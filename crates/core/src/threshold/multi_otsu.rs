@@ -6,14 +6,16 @@
 //! exact optimum is [79, 160] (the two objectives differ by 6e-8 relative,
 //! below float32 resolution). The thresholds are the centres of the last
 //! non-empty bin of each lower class; a voxel `v` gets class `#{t : v > t}`.
-use super::partition::{optimal_partition, Prefix};
-use super::{otsu, Histogram, ThresholdError};
+use super::partition::{Prefix, optimal_partition};
+use super::{Histogram, ThresholdError, otsu};
 
 /// The `classes - 1` thresholds of multi-class Otsu (`classes` in 2..=16).
 /// Two classes give exactly [`otsu`]. Errs when fewer bins than classes hold voxels.
 pub fn multi_otsu(h: &Histogram, classes: usize) -> Result<Vec<f64>, ThresholdError> {
     if !(2..=16).contains(&classes) {
-        return Err(ThresholdError::Invalid(format!("multi-Otsu needs 2 to 16 classes, not {classes}")));
+        return Err(ThresholdError::Invalid(format!(
+            "multi-Otsu needs 2 to 16 classes, not {classes}"
+        )));
     }
     let found = h.nonempty_bins();
     if found == 0 {
@@ -26,8 +28,13 @@ pub fn multi_otsu(h: &Histogram, classes: usize) -> Result<Vec<f64>, ThresholdEr
         return Ok(vec![otsu(h)?]);
     }
     // Empty bins change no class sums; search over the non-empty ones only.
-    let (values, weights): (Vec<f64>, Vec<f64>) =
-        h.centres.iter().zip(&h.counts).filter(|(_, c)| **c > 0).map(|(&x, &c)| (x, c as f64)).unzip();
+    let (values, weights): (Vec<f64>, Vec<f64>) = h
+        .centres
+        .iter()
+        .zip(&h.counts)
+        .filter(|(_, c)| **c > 0)
+        .map(|(&x, &c)| (x, c as f64))
+        .unzip();
     let p = Prefix::new(&values, &weights);
     let ends = optimal_partition(&p, values.len(), classes);
     Ok(ends[..classes - 1].iter().map(|&e| values[e - 1]).collect())
@@ -44,7 +51,11 @@ pub fn multi_otsu_objective(h: &Histogram, thresholds: &[f64]) -> f64 {
         w[k] += c as f64;
         s[k] += c as f64 * x;
     }
-    w.iter().zip(&s).filter(|(w, _)| **w > 0.0).map(|(w, s)| s * s / w).sum()
+    w.iter()
+        .zip(&s)
+        .filter(|(w, _)| **w > 0.0)
+        .map(|(w, s)| s * s / w)
+        .sum()
 }
 
 #[cfg(test)]
@@ -55,13 +66,26 @@ mod tests {
     fn three_separated_groups() {
         // 10 (x20000), 11 (x10000), 12 (x5000), 100 (x3000), 101 (x2000), 200 (x1000)
         let mut c = vec![0u64; 191];
-        for (v, n) in [(10, 20000), (11, 10000), (12, 5000), (100, 3000), (101, 2000), (200, 1000)] {
+        for (v, n) in [
+            (10, 20000),
+            (11, 10000),
+            (12, 5000),
+            (100, 3000),
+            (101, 2000),
+            (200, 1000),
+        ] {
             c[v - 10] = n;
         }
         let h = Histogram::native_from_counts(10, c).unwrap();
         assert_eq!(multi_otsu(&h, 3).unwrap(), vec![12.0, 101.0]);
         assert_eq!(multi_otsu(&h, 2).unwrap(), vec![12.0]);
-        assert!(matches!(multi_otsu(&h, 7), Err(ThresholdError::TooFewValues { classes: 7, found: 6 })));
+        assert!(matches!(
+            multi_otsu(&h, 7),
+            Err(ThresholdError::TooFewValues {
+                classes: 7,
+                found: 6
+            })
+        ));
         let best = multi_otsu_objective(&h, &[12.0, 101.0]);
         assert!(best > multi_otsu_objective(&h, &[11.0, 101.0]));
     }

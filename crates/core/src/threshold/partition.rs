@@ -56,7 +56,15 @@ impl Prefix {
 pub fn optimal_partition(p: &Prefix, n: usize, k: usize) -> Vec<usize> {
     assert!(k >= 1 && n >= k, "need at least k values");
     // f[b] for the current level, arg[m][b] = start of the last class.
-    let mut f: Vec<f64> = (0..=n).map(|b| if b == 0 { f64::NEG_INFINITY } else { p.term(0, b) }).collect();
+    let mut f: Vec<f64> = (0..=n)
+        .map(|b| {
+            if b == 0 {
+                f64::NEG_INFINITY
+            } else {
+                p.term(0, b)
+            }
+        })
+        .collect();
     let mut args: Vec<Vec<usize>> = Vec::with_capacity(k);
     args.push(vec![0; n + 1]);
     for m in 2..=k {
@@ -151,7 +159,10 @@ mod tests {
                     start = e;
                 }
                 let want = brute(&values, &weights, k);
-                assert!((got - want).abs() <= 1e-9 * want.abs(), "k={k} got {got} want {want}");
+                assert!(
+                    (got - want).abs() <= 1e-9 * want.abs(),
+                    "k={k} got {got} want {want}"
+                );
             }
         }
     }

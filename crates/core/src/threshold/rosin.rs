@@ -54,7 +54,11 @@ pub fn rosin(h: &Histogram, end: RosinEnd) -> Result<Rosin, ThresholdError> {
             p = i;
         }
     }
-    let last = h.counts.iter().rposition(|&c| c > 0).ok_or(ThresholdError::Empty)?;
+    let last = h
+        .counts
+        .iter()
+        .rposition(|&c| c > 0)
+        .ok_or(ThresholdError::Empty)?;
     let (x2, y2) = match end {
         RosinEnd::LastNonempty => (last, y[last]),
         RosinEnd::FirstEmptyAfterLast => (last + 1, 0.0),

@@ -10,10 +10,22 @@ use super::{Histogram, ThresholdError};
 /// returns its value.
 pub fn triangle(h: &Histogram) -> Result<f64, ThresholdError> {
     let nbins = h.counts.len();
-    let low0 = h.counts.iter().position(|&c| c > 0).ok_or(ThresholdError::Empty)?;
-    let high0 = h.counts.iter().rposition(|&c| c > 0).ok_or(ThresholdError::Empty)?;
+    let low0 = h
+        .counts
+        .iter()
+        .position(|&c| c > 0)
+        .ok_or(ThresholdError::Empty)?;
+    let high0 = h
+        .counts
+        .iter()
+        .rposition(|&c| c > 0)
+        .ok_or(ThresholdError::Empty)?;
     if low0 == high0 {
-        return Ok(if h.is_constant() { h.min } else { h.centres[low0] });
+        return Ok(if h.is_constant() {
+            h.min
+        } else {
+            h.centres[low0]
+        });
     }
     let mut peak = 0;
     for i in 1..nbins {
@@ -28,7 +40,11 @@ pub fn triangle(h: &Histogram) -> Result<f64, ThresholdError> {
     } else {
         h.counts.iter().map(|&c| c as f64).collect()
     };
-    let (low, peak) = if flip { (nbins - high0 - 1, nbins - peak - 1) } else { (low0, peak) };
+    let (low, peak) = if flip {
+        (nbins - high0 - 1, nbins - peak - 1)
+    } else {
+        (low0, peak)
+    };
     let width = (peak - low) as f64;
     let norm = (peak_height * peak_height + width * width).sqrt();
     let (ph, w) = (peak_height / norm, width / norm);

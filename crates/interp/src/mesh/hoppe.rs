@@ -30,7 +30,9 @@
 //! 5. Marching cubes of the zero set, voxelised; drawn slices restored.
 //!
 //! The surface is smooth but cuts corners and caps the ends flat; the
-//! original study found it less accurate than linear interpolation. Objects
+//! original study found it less accurate than linear interpolation. Two
+//! objects closer than about the gap between drawn slices can merge: between
+//! them the nearest tangent plane may belong to either, and the sign flips. Objects
 //! not much wider than the gap between drawn slices (small nucleoli when
 //! many slices are skipped) get no usable tangent planes — the `k`
 //! neighbours then span the whole object and the covariance has no clear
