@@ -172,3 +172,20 @@ fn missing_file_and_bad_tolerance_are_one_line_errors() {
         .args(["--tolerance", "-1"]);
     assert_one_line_error(&c.output().unwrap(), "tolerance");
 }
+
+#[test]
+fn a_label_in_neither_volume_is_answered_with_a_warning() {
+    let name = "gt_empty_mm";
+    let (gt, pred) = (case(name, "gt"), case(name, "pred"));
+    let out = bin()
+        .arg("evaluate")
+        .args([&gt, &pred])
+        .args(["--label", "7", "--json"])
+        .output()
+        .unwrap();
+    let j = stdout_json(&out);
+    assert_eq!((j["label"].as_u64(), j["tp"].as_u64()), (Some(7), Some(0)));
+    assert!(j["dice"].is_null() && j["hd"].is_null());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("label 7 is in neither volume"), "{err}");
+}

@@ -89,6 +89,13 @@ pub fn run(a: Args) -> Result<()> {
 
     if let Some(label) = a.label {
         let m = evaluate_label(&gt, &seg, label, a.tolerance)?;
+        if m.tp + m.fp + m.fn_ == 0 {
+            // Still a valid answer (both masks empty: ratios and distances
+            // are null), but most often a mistyped label: say so on stderr.
+            eprintln!(
+                "warning: label {label} is in neither volume; its metrics are those of two empty masks"
+            );
+        }
         if a.json {
             let out = Labelled { label, metrics: &m };
             println!("{}", serde_json::to_string_pretty(&out)?);
