@@ -80,6 +80,7 @@ pub fn run(a: Args) -> Result<()> {
             a.tolerance
         );
     }
+    let spin = crate::progress::spinner("measuring");
     let (gt, seg) = rayon::join(
         || read(&a.ground_truth, "ground truth"),
         || read(&a.segmentation, "segmentation"),
@@ -89,6 +90,7 @@ pub fn run(a: Args) -> Result<()> {
 
     if let Some(label) = a.label {
         let m = evaluate_label(&gt, &seg, label, a.tolerance)?;
+        spin.finish_and_clear();
         if m.tp + m.fp + m.fn_ == 0 {
             // Still a valid answer (both masks empty: ratios and distances
             // are null), but most often a mistyped label: say so on stderr.
@@ -110,6 +112,7 @@ pub fn run(a: Args) -> Result<()> {
         || evaluate_foreground(&gt, &seg, a.tolerance),
     );
     let (all, fg) = (all?, fg?);
+    spin.finish_and_clear();
     if a.json {
         let out = AllLabels {
             labels: all.iter().map(|(l, m)| (*l, m)).collect(),

@@ -53,6 +53,8 @@ pub fn run(a: Args) -> Result<()> {
         bail!("interpolate needs SPARSE and --out (or --list)");
     };
     let method = by_name(a.method.as_deref().unwrap_or(DEFAULT_METHOD))?;
+    let started = std::time::Instant::now();
+    let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
     let input = interslice_io::read_volume(&sparse_path)
         .with_context(|| format!("reading {}", sparse_path.display()))?;
     let sparse = input
@@ -64,6 +66,15 @@ pub fn run(a: Args) -> Result<()> {
     let written = same_type(&input, result)?;
     interslice_io::write_volume(&out, &written)
         .with_context(|| format!("writing {}", out.display()))?;
+    spin.finish_and_clear();
+    println!(
+        "{}: {} drawn slices along {}, {:.2} s -> {}",
+        method.name(),
+        drawn.len(),
+        a.axis,
+        started.elapsed().as_secs_f64(),
+        out.display()
+    );
     Ok(())
 }
 
