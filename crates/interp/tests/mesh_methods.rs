@@ -1,31 +1,12 @@
 //! The four mesh-based methods of the original system: accuracy floors on an
 //! ellipsoid and a two-lobed nucleus traced on every 5th slice, the
 //! invariants along every axis with anisotropic spacing, and their surfaces.
-use interslice_core::{Axis, Geometry, LengthUnit, Mask, Volume};
+use interslice_core::{Axis, Mask};
 use interslice_interp::mesh::{MESH_METHODS, mesh_methods, surface};
 use interslice_interp::{Interpolator, SparseMask};
 
-fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn([f64; 3]) -> bool) -> Mask {
-    let g = Geometry::new(dims, spacing, LengthUnit::Micrometre).unwrap();
-    let mut m: Mask = Volume::zeros(g);
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            for i in 0..dims[0] {
-                let p = [
-                    (i as f64 + 0.5) * spacing[0],
-                    (j as f64 + 0.5) * spacing[1],
-                    (k as f64 + 0.5) * spacing[2],
-                ];
-                m.set(i, j, k, inside(p));
-            }
-        }
-    }
-    m
-}
-
-fn in_ellipsoid(p: [f64; 3], c: [f64; 3], r: [f64; 3]) -> bool {
-    (0..3).map(|d| ((p[d] - c[d]) / r[d]).powi(2)).sum::<f64>() <= 1.0
-}
+mod common;
+use common::{dice, every, in_ellipsoid, shape, sparse};
 
 fn ellipsoid() -> Mask {
     shape([64, 64, 64], [1.0; 3], |p| {
@@ -39,32 +20,6 @@ fn two_lobes() -> Mask {
         in_ellipsoid(p, [22.0, 32.0, 32.0], [13.0, 12.0, 20.0])
             || in_ellipsoid(p, [42.0, 32.0, 31.0], [12.0, 13.0, 18.0])
     })
-}
-
-fn sparse(full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
-    let mut m: Mask = Volume::zeros(full.geometry().clone());
-    for &d in drawn {
-        m.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
-    }
-    m
-}
-
-fn every(n: usize, step: usize) -> Vec<usize> {
-    let mut d: Vec<usize> = (0..n).step_by(step).collect();
-    if *d.last().unwrap() != n - 1 {
-        d.push(n - 1);
-    }
-    d
-}
-
-fn dice(a: &Mask, b: &Mask) -> f64 {
-    let (mut tp, mut na, mut nb) = (0usize, 0usize, 0usize);
-    for (&x, &y) in a.data().iter().zip(b.data()) {
-        tp += (x && y) as usize;
-        na += x as usize;
-        nb += y as usize;
-    }
-    2.0 * tp as f64 / (na + nb) as f64
 }
 
 fn count(m: &Mask) -> usize {

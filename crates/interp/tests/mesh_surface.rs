@@ -4,6 +4,9 @@ use interslice_core::{Geometry, LengthUnit, Mask, Volume};
 use interslice_interp::mesh::{mask_surface, voxelize::voxelize};
 use proptest::prelude::*;
 
+mod common;
+use common::dice;
+
 fn sphere(n: usize, spacing: [f64; 3], r: f64) -> Mask {
     let g = Geometry::new([n, n, n], spacing, LengthUnit::Micrometre).unwrap();
     let c: Vec<f64> = (0..3).map(|d| n as f64 * spacing[d] / 2.0).collect();
@@ -26,16 +29,6 @@ fn sphere(n: usize, spacing: [f64; 3], r: f64) -> Mask {
         }
     }
     m
-}
-
-fn dice(a: &Mask, b: &Mask) -> f64 {
-    let (mut tp, mut na, mut nb) = (0usize, 0usize, 0usize);
-    for (&x, &y) in a.data().iter().zip(b.data()) {
-        tp += (x && y) as usize;
-        na += x as usize;
-        nb += y as usize;
-    }
-    2.0 * tp as f64 / (na + nb) as f64
 }
 
 #[test]

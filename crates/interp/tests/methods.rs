@@ -1,60 +1,18 @@
 //! Invariants every registered interpolator must keep, checked generically
 //! over `registry::methods()`, and the accuracy of each on known shapes.
-use interslice_core::{Axis, Geometry, LengthUnit, Mask, Volume};
+use interslice_core::{Axis, Mask};
 use interslice_interp::{SparseMask, methods};
 
-/// A mask from an implicit shape in physical coordinates of voxel centres.
+mod common;
+use common::{dice, every, in_ellipsoid, sparse};
+
+/// [`common::shape`] with the coordinates as three arguments.
 fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn(f64, f64, f64) -> bool) -> Mask {
-    let g = Geometry::new(dims, spacing, LengthUnit::Micrometre).unwrap();
-    let mut m: Mask = Volume::zeros(g);
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            for i in 0..dims[0] {
-                let p = [
-                    (i as f64 + 0.5) * spacing[0],
-                    (j as f64 + 0.5) * spacing[1],
-                    (k as f64 + 0.5) * spacing[2],
-                ];
-                m.set(i, j, k, inside(p[0], p[1], p[2]));
-            }
-        }
-    }
-    m
+    common::shape(dims, spacing, |p| inside(p[0], p[1], p[2]))
 }
 
 fn ellipsoid(c: [f64; 3], r: [f64; 3]) -> impl Fn(f64, f64, f64) -> bool {
-    move |x, y, z| {
-        ((x - c[0]) / r[0]).powi(2) + ((y - c[1]) / r[1]).powi(2) + ((z - c[2]) / r[2]).powi(2)
-            <= 1.0
-    }
-}
-
-/// Keep only the drawn slices of `full` along `axis`.
-fn sparse(full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
-    let mut m: Mask = Volume::zeros(full.geometry().clone());
-    for &d in drawn {
-        m.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
-    }
-    m
-}
-
-/// Every `step`-th slice from 0, plus the last one.
-fn every(n: usize, step: usize) -> Vec<usize> {
-    let mut d: Vec<usize> = (0..n).step_by(step).collect();
-    if *d.last().unwrap() != n - 1 {
-        d.push(n - 1);
-    }
-    d
-}
-
-fn dice(a: &Mask, b: &Mask) -> f64 {
-    let (mut tp, mut na, mut nb) = (0usize, 0usize, 0usize);
-    for (&x, &y) in a.data().iter().zip(b.data()) {
-        tp += (x && y) as usize;
-        na += x as usize;
-        nb += y as usize;
-    }
-    2.0 * tp as f64 / (na + nb) as f64
+    move |x, y, z| in_ellipsoid([x, y, z], c, r)
 }
 
 /// 4-connected components of a 2D slice.
