@@ -354,7 +354,7 @@ pub fn write(file: &ContourFile) -> Result<String, CoreError> {
     let geometry = WireGeometry {
         dims: g.dims,
         spacing: g.spacing,
-        unit: unit_name(g.unit).into(),
+        unit: g.unit.ascii().into(),
         origin: (!default_origin).then_some(g.origin),
         direction: (!default_dir).then_some(g.direction),
     };
@@ -398,16 +398,6 @@ pub fn write(file: &ContourFile) -> Result<String, CoreError> {
     push_list(&mut out, "drawn_empty", &empties?, false);
     out.push_str("}\n");
     Ok(out)
-}
-
-/// The unit as written in the file: "um" (ASCII, so every tool reads it), "mm", "m", "unknown".
-fn unit_name(u: LengthUnit) -> &'static str {
-    match u {
-        LengthUnit::Micrometre => "um",
-        LengthUnit::Millimetre => "mm",
-        LengthUnit::Metre => "m",
-        LengthUnit::Unknown => "unknown",
-    }
 }
 
 fn push_list(out: &mut String, key: &str, items: &[String], comma: bool) {

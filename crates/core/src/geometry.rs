@@ -28,6 +28,17 @@ impl LengthUnit {
         }
     }
 
+    /// ASCII name for file headers ("um", "mm", "m", "unknown"): every tool
+    /// reads it, and [`LengthUnit::parse`] reads it back.
+    pub fn ascii(self) -> &'static str {
+        match self {
+            LengthUnit::Micrometre => "um",
+            LengthUnit::Millimetre => "mm",
+            LengthUnit::Metre => "m",
+            LengthUnit::Unknown => "unknown",
+        }
+    }
+
     /// Parse a unit name as written by common tools ("um", "µm", "micron", "mm", ...).
     pub fn parse(s: &str) -> Option<LengthUnit> {
         match s.trim().to_ascii_lowercase().as_str() {

@@ -258,15 +258,6 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     stack.finish(path, g)
 }
 
-fn unit_name(u: LengthUnit) -> &'static str {
-    match u {
-        LengthUnit::Micrometre => "um",
-        LengthUnit::Millimetre => "mm",
-        LengthUnit::Metre => "m",
-        LengthUnit::Unknown => "unknown",
-    }
-}
-
 fn metres_per_unit(u: LengthUnit) -> Option<f64> {
     match u {
         LengthUnit::Micrometre => Some(1e-6),
@@ -283,7 +274,7 @@ fn text_of(g: &Geometry) -> String {
         num(g.spacing[0]),
         num(g.spacing[1]),
         num(g.spacing[2]),
-        unit_name(g.unit),
+        g.unit.ascii(),
         num(g.origin[0]),
         num(g.origin[1]),
         num(g.origin[2]),

@@ -270,15 +270,6 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     raw::decode_volume(&name, geometry, t, endian, &bytes)
 }
 
-fn unit_name(u: LengthUnit) -> &'static str {
-    match u {
-        LengthUnit::Micrometre => "um",
-        LengthUnit::Millimetre => "mm",
-        LengthUnit::Metre => "m",
-        LengthUnit::Unknown => "unknown",
-    }
-}
-
 fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> String {
     let g = v.geometry();
     let d = g.direction;
@@ -308,7 +299,7 @@ fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> Str
         num(g.spacing[1]),
         num(g.spacing[2])
     ));
-    s.push_str(&format!("ElementSpacingUnits = {}\n", unit_name(g.unit)));
+    s.push_str(&format!("ElementSpacingUnits = {}\n", g.unit.ascii()));
     s.push_str(&format!(
         "DimSize = {} {} {}\n",
         g.dims[0], g.dims[1], g.dims[2]

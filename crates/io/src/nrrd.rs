@@ -587,22 +587,13 @@ fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u
     Ok(out)
 }
 
-fn unit_name(u: LengthUnit) -> &'static str {
-    match u {
-        LengthUnit::Micrometre => "um",
-        LengthUnit::Millimetre => "mm",
-        LengthUnit::Metre => "m",
-        LengthUnit::Unknown => "unknown",
-    }
-}
-
 /// Write a `.nrrd` file (attached gzip data) atomically.
 pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
     let g = v.geometry();
     let t = RawType::of(v);
     let vec3 = |x: [f64; 3]| format!("({},{},{})", num(x[0]), num(x[1]), num(x[2]));
     let axis = |c: usize| [0, 1, 2].map(|r| g.direction[r][c] * g.spacing[c]);
-    let u = unit_name(g.unit);
+    let u = g.unit.ascii();
     let head = format!(
         "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n\
          type: {}\ndimension: 3\nspace: left-posterior-superior\nsizes: {} {} {}\n\
