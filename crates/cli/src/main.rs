@@ -33,6 +33,14 @@ enum Command {
     Phantom(cmd::phantom::Args),
     /// Write the surface mesh of a label, or of a method's interpolation (STL, PLY, OBJ).
     Mesh(cmd::mesh::Args),
+    /// Serve a project folder: the tracing web UI and its HTTP API.
+    Serve(cmd::serve::Args),
+    /// Write phantom cells to a project folder and serve it (the quick start).
+    Demo(cmd::demo::Args),
+    /// Manage the accounts of a project (required when serving off loopback).
+    User(cmd::user::Args),
+    /// Write a user's interpolated label volume (or contours) of one cell.
+    Export(cmd::export::Args),
 }
 
 fn main() {
@@ -46,6 +54,10 @@ fn main() {
         Command::Evaluate(a) => cmd::evaluate::run(a),
         Command::Phantom(a) => cmd::phantom::run(a),
         Command::Mesh(a) => cmd::mesh::run(a),
+        Command::Serve(a) => cmd::serve::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
+        Command::User(a) => cmd::user::run(a),
+        Command::Export(a) => cmd::export::run(a),
     };
     if let Err(e) = result {
         // One line: the chain of causes joined by ": ".

@@ -1,9 +1,13 @@
 //! One module per subcommand.
 pub mod contours;
 pub mod convert;
+pub mod demo;
 pub mod evaluate;
+pub mod export;
 pub mod info;
 pub mod interpolate;
 pub mod mesh;
 pub mod phantom;
+pub mod serve;
 pub mod study;
+pub mod user;

@@ -1,0 +1,79 @@
+//! `interslice export DIR --cell NAME --user U [--label L] [--method M] --out FILE`:
+//! a user's interpolated label volume of one cell, from the command line.
+//!
+//! The same computation as the server's export: each label the user traced is
+//! interpolated along the axis with most drawn slices, then painted in
+//! ascending label order. `--out` ending in `.contours.json` writes the user's
+//! contours instead.
+use anyhow::{Context, Result, bail};
+use interslice_server::{AppState, Config};
+use std::path::PathBuf;
+
+/// Arguments of `export`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The project folder.
+    pub dir: PathBuf,
+    /// The cell id (its file name without extension, as the server lists it).
+    #[arg(long)]
+    pub cell: String,
+    /// Whose tracing.
+    #[arg(long)]
+    pub user: String,
+    /// Only this label (default: every label the user traced).
+    #[arg(long)]
+    pub label: Option<u16>,
+    /// Interpolation method (`interslice interpolate --list`; default the best).
+    #[arg(long)]
+    pub method: Option<String>,
+    /// The annotation database (default DIR/.interslice/annotations.sqlite).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Output file: a label volume (.nii.gz, .nii, .nrrd, .mha, .tif) or `.contours.json`.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Run the command.
+pub fn run(a: Args) -> Result<()> {
+    let mut config = Config::new(&a.dir);
+    config.db = a.db.clone();
+    let state = AppState::open(&config)?;
+    let path = state.cell_path(&a.cell)?;
+    let user = state
+        .store
+        .user(&a.user)?
+        .with_context(|| format!("no user '{}' in this project", a.user))?;
+    let cell = interslice_server::cells::LoadedCell::load(&path)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let geometry = cell.volume.geometry();
+    let name = a.out.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".contours.json") || name.ends_with(".json") {
+        let text = interslice_server::api::contours_json(&state, &a.cell, geometry, &user)
+            ?;
+        interslice_io::raw::write_atomic(&a.out, |w| {
+            use std::io::Write as _;
+            w.write_all(text.as_bytes())
+        })
+            .with_context(|| format!("writing {}", a.out.display()))?;
+    } else {
+        let method = interslice_server::api::method_by_name(a.method.as_deref())
+            ?;
+        let labels = interslice_server::groundtruth::label_volume(
+            &state.store,
+            geometry,
+            &a.cell,
+            user.id,
+            method.as_ref(),
+            a.label,
+        )
+        ?;
+        if labels.data().iter().all(|&v| v == 0) {
+            bail!("the interpolated volume is empty");
+        }
+        interslice_io::write_labels(&a.out, &labels)
+            .with_context(|| format!("writing {}", a.out.display()))?;
+    }
+    eprintln!("wrote {}", a.out.display());
+    Ok(())
+}

@@ -1,0 +1,58 @@
+//! `interslice serve DIR [--bind ADDR] [--db FILE] [--require-login]`: the
+//! tracing server and its web UI over a project folder.
+use anyhow::Result;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+/// Arguments of `serve`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The project folder: volume files and folders of slices, one cell each.
+    pub dir: PathBuf,
+    /// Address to listen on. Off loopback, accounts with passwords are required.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    pub bind: SocketAddr,
+    /// The annotation database (default DIR/.interslice/annotations.sqlite).
+    #[arg(long)]
+    pub db: Option<PathBuf>,
+    /// Require accounts with passwords even on loopback.
+    #[arg(long)]
+    pub require_login: bool,
+    /// Largest request body accepted, in MiB (larger requests get 413).
+    #[arg(long, default_value_t = 16)]
+    pub body_limit_mib: usize,
+}
+
+impl Args {
+    /// The server configuration these arguments describe.
+    pub fn config(&self) -> interslice_server::Config {
+        let mut c = interslice_server::Config::new(&self.dir);
+        c.bind = self.bind;
+        c.db = self.db.clone();
+        c.require_login = self.require_login;
+        c.body_limit = self.body_limit_mib << 20;
+        c
+    }
+}
+
+/// Run the command: serve until Ctrl-C or SIGTERM.
+pub fn run(a: Args) -> Result<()> {
+    serve(a.config())
+}
+
+/// Serve `config`, printing the URL once listening.
+pub fn serve(config: interslice_server::Config) -> Result<()> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?;
+    rt.block_on(interslice_server::run(config, |addr, state| {
+        let cells = state.cells.read().map(|c| c.len()).unwrap_or(0);
+        let login = if state.auth_required {
+            "accounts with passwords required (interslice user add)"
+        } else {
+            "sign in with a name"
+        };
+        println!("interslice: {cells} cell(s) in {}", state.dir.display());
+        println!("interslice: serving on http://{addr}/  ({login}; Ctrl-C stops)");
+    }))
+}

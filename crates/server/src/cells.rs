@@ -1,0 +1,321 @@
+//! The cells of a project folder: discovery, safe ids, and a small LRU cache of
+//! loaded volumes (a 512³ 16-bit volume is 256 MiB, so only a few stay loaded).
+use crate::error::ApiError;
+use interslice_core::{AnyVolume, Volume, Voxel};
+use rayon::prelude::*;
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Component, Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use tokio::sync::OnceCell;
+
+/// Folder names inside a project that never hold cells.
+pub const RESERVED_DIRS: [&str; 3] = [".interslice", "ground_truth", "segmentations"];
+
+/// Volume file extensions, longest first, stripped to make a cell id.
+const EXTENSIONS: [&str; 11] = [
+    ".ome.tiff", ".ome.tif", ".nii.gz", ".nrrd", ".nhdr", ".tiff", ".nii", ".mha", ".mhd", ".tif",
+    ".dcm",
+];
+
+/// True for a name usable as a cell id: 1..=128 of `[A-Za-z0-9._-]`, not
+/// starting with a dot (so never `.`, `..` or a hidden file), never a path.
+pub fn is_safe_id(id: &str) -> bool {
+    !id.is_empty()
+        && id.len() <= 128
+        && !id.starts_with('.')
+        && id
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'.' || b == b'_' || b == b'-')
+}
+
+/// The cell id of a file or folder name: the name without its volume
+/// extension, characters outside `[A-Za-z0-9._-]` replaced by `_`.
+pub fn id_of_name(name: &str) -> String {
+    let lower = name.to_ascii_lowercase();
+    let stem = EXTENSIONS
+        .iter()
+        .find(|e| lower.ends_with(*e) && lower.len() > e.len())
+        .map(|e| &name[..name.len() - e.len()])
+        .unwrap_or(name);
+    let mut id: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if id.starts_with('.') || id.is_empty() {
+        id.insert(0, '_');
+    }
+    id.truncate(120);
+    id
+}
+
+/// A relative path given by a client (e.g. a segmentation file to evaluate):
+/// refused when absolute or when it has `..` (or any non-normal component).
+pub fn safe_relative_path(p: &str) -> Result<PathBuf, ApiError> {
+    let path = Path::new(p);
+    if p.is_empty() || p.contains('\0') {
+        return Err(ApiError::bad_request("empty path"));
+    }
+    if path.is_absolute() || p.starts_with('/') || p.starts_with('\\') {
+        return Err(ApiError::bad_request(format!(
+            "absolute paths are not allowed: '{p}'"
+        )));
+    }
+    for c in path.components() {
+        if !matches!(c, Component::Normal(_)) {
+            return Err(ApiError::bad_request(format!(
+                "paths may not contain '..' or '.': '{p}'"
+            )));
+        }
+    }
+    if p.split(['/', '\\']).any(|s| s == "..") {
+        return Err(ApiError::bad_request(format!("paths may not contain '..': '{p}'")));
+    }
+    Ok(path.to_path_buf())
+}
+
+fn has_slice_images(dir: &Path) -> bool {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    rd.flatten()
+        .filter(|e| {
+            let n = e.file_name().to_string_lossy().to_ascii_lowercase();
+            n.ends_with(".png") || n.ends_with(".tif") || n.ends_with(".tiff")
+        })
+        .take(2)
+        .count()
+        >= 2
+}
+
+/// The cells of `dir`, by id: supported volume files and folders of slice
+/// images at the top level; hidden entries and the reserved folders skipped.
+/// Two names mapping to one id get `-2`, `-3`, ... in name order.
+pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
+    let mut entries: Vec<(String, PathBuf)> = std::fs::read_dir(dir)?
+        .flatten()
+        .map(|e| (e.file_name().to_string_lossy().to_string(), e.path()))
+        .collect();
+    entries.sort();
+    let mut out = BTreeMap::new();
+    for (name, path) in entries {
+        if name.starts_with('.') || RESERVED_DIRS.contains(&name.as_str()) {
+            continue;
+        }
+        let ok = if path.is_dir() {
+            has_slice_images(&path) && interslice_io::Format::of_path(&path).is_ok()
+        } else {
+            interslice_io::Format::of_path(&path).is_ok()
+        };
+        if !ok {
+            continue;
+        }
+        let base = id_of_name(&name);
+        let mut id = base.clone();
+        let mut n = 2;
+        while out.contains_key(&id) {
+            id = format!("{base}-{n}");
+            n += 1;
+        }
+        out.insert(id, path);
+    }
+    Ok(out)
+}
+
+/// A volume in memory with what the API reports about it.
+#[derive(Debug)]
+pub struct LoadedCell {
+    /// The voxels.
+    pub volume: AnyVolume,
+    /// Smallest intensity.
+    pub min: f64,
+    /// Largest intensity.
+    pub max: f64,
+    /// Width of a histogram bin.
+    pub bin_width: f64,
+    /// 256 histogram bins from `min`.
+    pub counts: Vec<u64>,
+    /// BLAKE3 of the dims and voxel bytes (detects a file changed under tracings).
+    pub content_hash: String,
+}
+
+fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
+    v.data()
+        .par_chunks(1 << 16)
+        .fold(
+            || vec![0u64; 256],
+            |mut acc, chunk| {
+                for &x in chunk {
+                    let b = ((x.to_f64() - min) / width).floor();
+                    let b = if b.is_finite() { b.clamp(0.0, 255.0) as usize } else { 0 };
+                    acc[b] += 1;
+                }
+                acc
+            },
+        )
+        .reduce(
+            || vec![0u64; 256],
+            |mut a, b| {
+                a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                a
+            },
+        )
+}
+
+/// Little-endian bytes of voxels.
+pub fn le_bytes(v: &AnyVolume, range: std::ops::Range<usize>) -> Vec<u8> {
+    match v {
+        AnyVolume::U8(v) => v.data()[range].to_vec(),
+        AnyVolume::U16(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
+        AnyVolume::I16(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
+        AnyVolume::F32(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
+    }
+}
+
+impl LoadedCell {
+    /// Read a cell and compute its range, histogram and content hash.
+    pub fn load(path: &Path) -> Result<LoadedCell, interslice_io::IoError> {
+        let volume = interslice_io::read_volume(path)?;
+        Ok(Self::from_volume(volume))
+    }
+
+    /// Wrap a volume already in memory.
+    pub fn from_volume(volume: AnyVolume) -> LoadedCell {
+        let (min, max) = volume.min_max();
+        let integer = !matches!(volume, AnyVolume::F32(_));
+        let bin_width = if integer {
+            ((max - min + 1.0) / 256.0).ceil().max(1.0)
+        } else if max > min {
+            (max - min) / 256.0
+        } else {
+            1.0
+        };
+        let counts = match &volume {
+            AnyVolume::U8(v) => histogram(v, min, bin_width),
+            AnyVolume::U16(v) => histogram(v, min, bin_width),
+            AnyVolume::I16(v) => histogram(v, min, bin_width),
+            AnyVolume::F32(v) => histogram(v, min, bin_width),
+        };
+        let mut h = blake3::Hasher::new();
+        h.update(volume.type_name().as_bytes());
+        for d in volume.geometry().dims {
+            h.update(&(d as u64).to_le_bytes());
+        }
+        let n = volume.geometry().len();
+        let step = 1 << 16;
+        let mut start = 0;
+        while start < n {
+            let end = (start + step).min(n);
+            h.update(&le_bytes(&volume, start..end));
+            start = end;
+        }
+        LoadedCell {
+            volume,
+            min,
+            max,
+            bin_width,
+            counts,
+            content_hash: h.finalize().to_hex().to_string(),
+        }
+    }
+
+    /// "u8", "u16", "i16" or "f32".
+    pub fn dtype(&self) -> &'static str {
+        self.volume.type_name()
+    }
+}
+
+type Slot = Arc<OnceCell<Arc<LoadedCell>>>;
+
+/// An LRU of loaded cells; concurrent requests for one cell share one load.
+pub struct CellCache {
+    capacity: usize,
+    slots: Mutex<VecDeque<(String, Slot)>>,
+}
+
+impl CellCache {
+    /// A cache holding at most `capacity` volumes (at least 1).
+    pub fn new(capacity: usize) -> CellCache {
+        CellCache {
+            capacity: capacity.max(1),
+            slots: Mutex::new(VecDeque::new()),
+        }
+    }
+
+    fn slot(&self, id: &str) -> Slot {
+        let mut slots = self.slots.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(pos) = slots.iter().position(|(k, _)| k == id) {
+            let entry = slots.remove(pos).expect("position is valid");
+            let slot = entry.1.clone();
+            slots.push_back(entry);
+            return slot;
+        }
+        let slot: Slot = Arc::new(OnceCell::new());
+        slots.push_back((id.to_string(), slot.clone()));
+        while slots.len() > self.capacity {
+            slots.pop_front();
+        }
+        slot
+    }
+
+    /// The loaded cell `id`, reading it with `load` on a blocking thread if needed.
+    pub async fn get<F>(&self, id: &str, load: F) -> Result<Arc<LoadedCell>, ApiError>
+    where
+        F: FnOnce() -> Result<LoadedCell, ApiError> + Send + 'static,
+    {
+        let slot = self.slot(id);
+        let cell = slot
+            .get_or_try_init(|| async move {
+                let loaded = tokio::task::spawn_blocking(load).await??;
+                Ok::<_, ApiError>(Arc::new(loaded))
+            })
+            .await?;
+        Ok(cell.clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_safe_names() {
+        assert_eq!(id_of_name("cell 01.nii.gz"), "cell_01");
+        assert_eq!(id_of_name("A.NRRD"), "A");
+        assert_eq!(id_of_name(".hidden.nii"), "_.hidden");
+        assert_eq!(id_of_name("slices"), "slices");
+        for n in ["cell 01.nii.gz", "../x.nii", "é.tif", "..", "a/b"] {
+            assert!(is_safe_id(&id_of_name(n)), "{n}");
+        }
+        assert!(!is_safe_id("../etc"));
+        assert!(!is_safe_id("/etc"));
+        assert!(!is_safe_id(".."));
+        assert!(!is_safe_id(""));
+        assert!(is_safe_id("cell-1.v2"));
+    }
+
+    #[test]
+    fn relative_paths_refuse_escapes() {
+        assert!(safe_relative_path("segmentations/c1/otsu.nii.gz").is_ok());
+        for bad in ["../x", "/etc/passwd", "a/../../b", "./a", "", "a/..", "\\x"] {
+            assert!(safe_relative_path(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn histogram_of_u8_has_unit_bins() {
+        let g = interslice_core::Geometry::new([4, 1, 1], [1.0; 3], Default::default()).unwrap();
+        let v = Volume::from_vec(g, vec![3u8, 3, 5, 200]).unwrap();
+        let c = LoadedCell::from_volume(AnyVolume::U8(v));
+        assert_eq!((c.min, c.max, c.bin_width), (3.0, 200.0, 1.0));
+        assert_eq!(c.counts[0], 2);
+        assert_eq!(c.counts[2], 1);
+        assert_eq!(c.counts[197], 1);
+        assert_eq!(c.counts.iter().sum::<u64>(), 4);
+    }
+}

@@ -1,0 +1,283 @@
+//! The tracing server: the HTTP API of `docs/API.md` over a project folder and
+//! its annotation database, plus the embedded web UI.
+//!
+//! A project folder holds the cells (volume files or folders of slices); the
+//! database lives at `DIR/.interslice/annotations.sqlite`. Volumes are read
+//! lazily and kept in a small LRU ([`cells::CellCache`]); slices are served as
+//! raw little-endian bytes straight from memory.
+//!
+//! Users: on a loopback bind a name is enough (the user is created on first
+//! login); on any other bind, accounts with argon2 passwords are required
+//! (`interslice user add`). Sessions are random 256-bit tokens in an HttpOnly,
+//! SameSite=Strict cookie. A user reads and writes only their own tracings; a
+//! reviewer also reads everyone's.
+#![deny(missing_docs)]
+
+pub mod api;
+pub mod auth;
+pub mod cells;
+pub mod error;
+pub mod groundtruth;
+pub mod loadtest;
+pub mod openapi;
+pub mod web;
+
+use anyhow::Context as _;
+use axum::Router;
+use interslice_store::Store;
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, RwLock};
+use std::time::Duration;
+
+/// How the server runs.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// The project folder.
+    pub dir: PathBuf,
+    /// Address to listen on (port 0 picks a free port).
+    pub bind: SocketAddr,
+    /// The database file (default `DIR/.interslice/annotations.sqlite`).
+    pub db: Option<PathBuf>,
+    /// Force login with passwords even on loopback (default: only off loopback).
+    pub require_login: bool,
+    /// Volumes kept in memory.
+    pub cache_cells: usize,
+    /// Largest request body accepted, bytes (larger → 413).
+    pub body_limit: usize,
+    /// Time limit of one request (interpolation of a large cell included).
+    pub timeout: Duration,
+}
+
+impl Config {
+    /// Defaults for a project folder: 127.0.0.1:8080, 4 cached volumes, 16 MiB
+    /// bodies, 300 s per request.
+    pub fn new(dir: impl Into<PathBuf>) -> Config {
+        Config {
+            dir: dir.into(),
+            bind: SocketAddr::from(([127, 0, 0, 1], 8080)),
+            db: None,
+            require_login: false,
+            cache_cells: 4,
+            body_limit: 16 << 20,
+            timeout: Duration::from_secs(300),
+        }
+    }
+}
+
+/// Shared state of the handlers.
+pub struct AppState {
+    /// The project folder.
+    pub dir: PathBuf,
+    /// The annotation database.
+    pub store: Arc<Store>,
+    /// Cells found in the folder, by id.
+    pub cells: RwLock<BTreeMap<String, PathBuf>>,
+    /// Loaded volumes.
+    pub cache: cells::CellCache,
+    /// Whether passwords are required.
+    pub auth_required: bool,
+    /// Interpolated ground truths, for overlays and evaluation.
+    pub gt_cache: groundtruth::GtCache,
+}
+
+/// The state as handlers get it.
+pub type SharedState = Arc<AppState>;
+
+impl AppState {
+    /// Open the database and register the cells of `config.dir`.
+    pub fn open(config: &Config) -> anyhow::Result<SharedState> {
+        let dir = config.dir.clone();
+        if !dir.is_dir() {
+            anyhow::bail!("{} is not a folder", dir.display());
+        }
+        let db = config
+            .db
+            .clone()
+            .unwrap_or_else(|| interslice_store::default_db_path(&dir));
+        let store = Store::open(&db).with_context(|| format!("cannot open {}", db.display()))?;
+        let auth_required = config.require_login || !config.bind.ip().is_loopback();
+        let state = Arc::new(AppState {
+            dir,
+            store: Arc::new(store),
+            cells: RwLock::new(BTreeMap::new()),
+            cache: cells::CellCache::new(config.cache_cells),
+            auth_required,
+            gt_cache: groundtruth::GtCache::new(4),
+        });
+        state.rescan().context("cannot list the project folder")?;
+        Ok(state)
+    }
+
+    /// Re-read the folder's cells and register new ones in the database.
+    pub fn rescan(&self) -> anyhow::Result<()> {
+        let found = cells::scan(&self.dir)?;
+        for (id, path) in &found {
+            let rel = path.strip_prefix(&self.dir).unwrap_or(path);
+            self.store.upsert_cell(id, &rel.to_string_lossy())?;
+        }
+        *self.cells.write().unwrap_or_else(|e| e.into_inner()) = found;
+        Ok(())
+    }
+
+    /// The path of a cell, or 400 for an unsafe id and 404 for an unknown one.
+    pub fn cell_path(&self, id: &str) -> Result<PathBuf, error::ApiError> {
+        if !cells::is_safe_id(id) {
+            return Err(error::ApiError::bad_request(format!(
+                "invalid cell id '{id}' (ids are names, never paths)"
+            )));
+        }
+        self.cells
+            .read()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(id)
+            .cloned()
+            .ok_or_else(|| error::ApiError::not_found(format!("unknown cell '{id}'")))
+    }
+
+    /// The loaded volume of a cell.
+    pub async fn cell(&self, id: &str) -> Result<Arc<cells::LoadedCell>, error::ApiError> {
+        let path = self.cell_path(id)?;
+        let store = self.store.clone();
+        let cid = id.to_string();
+        self.cache
+            .get(id, move || {
+                let loaded = cells::LoadedCell::load(&path)?;
+                // Remember what the cell is; a changed hash means the file was
+                // replaced under existing tracings (kept, but worth a warning).
+                if let Ok(Some(old)) = store.set_cell_content(
+                    &cid,
+                    &loaded.content_hash,
+                    loaded.volume.geometry(),
+                    loaded.dtype(),
+                ) {
+                    eprintln!(
+                        "warning: cell '{cid}' changed on disk (content hash {old} -> {})",
+                        loaded.content_hash
+                    );
+                }
+                Ok(loaded)
+            })
+            .await
+    }
+}
+
+/// The full application: API, OpenAPI document and web UI, with the body
+/// limit, request timeout and panic catcher.
+pub fn app(state: SharedState, config: &Config) -> Router {
+    use tower_http::catch_panic::CatchPanicLayer;
+    use tower_http::timeout::TimeoutLayer;
+    api::router()
+        .merge(web::router())
+        .layer(axum::extract::DefaultBodyLimit::max(config.body_limit))
+        .layer(TimeoutLayer::with_status_code(
+            axum::http::StatusCode::REQUEST_TIMEOUT,
+            config.timeout,
+        ))
+        .layer(CatchPanicLayer::custom(|_err: Box<dyn std::any::Any + Send>| {
+            error::error_response(
+                axum::http::StatusCode::INTERNAL_SERVER_ERROR,
+                "internal error (a bug; the request was not applied)",
+            )
+        }))
+        .with_state(state)
+}
+
+/// Bind, call `ready` with the bound address, and serve until Ctrl-C / SIGTERM.
+pub async fn run(config: Config, ready: impl FnOnce(SocketAddr, &AppState)) -> anyhow::Result<()> {
+    let state = AppState::open(&config)?;
+    let listener = tokio::net::TcpListener::bind(config.bind)
+        .await
+        .with_context(|| format!("cannot listen on {}", config.bind))?;
+    let addr = listener.local_addr()?;
+    ready(addr, &state);
+    let app = app(state, &config);
+    axum::serve(listener, app)
+        .with_graceful_shutdown(shutdown_signal())
+        .await
+        .context("server failed")
+}
+
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! { _ = ctrl_c => {}, _ = term => {} }
+}
+
+/// A server running on its own thread (tests, benchmarks); stops when dropped.
+pub struct RunningServer {
+    /// The bound address.
+    pub addr: SocketAddr,
+    /// The state (database access for checks).
+    pub state: SharedState,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl RunningServer {
+    /// `http://ADDR`.
+    pub fn url(&self) -> String {
+        format!("http://{}", self.addr)
+    }
+}
+
+impl Drop for RunningServer {
+    fn drop(&mut self) {
+        if let Some(s) = self.stop.take() {
+            let _ = s.send(());
+        }
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Start a server on a background thread with its own runtime.
+pub fn spawn(config: Config) -> anyhow::Result<RunningServer> {
+    let state = AppState::open(&config)?;
+    let std_listener = std::net::TcpListener::bind(config.bind)
+        .with_context(|| format!("cannot listen on {}", config.bind))?;
+    std_listener.set_nonblocking(true)?;
+    let addr = std_listener.local_addr()?;
+    let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+    let app = app(state.clone(), &config);
+    let thread = std::thread::spawn(move || {
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .expect("tokio runtime");
+        rt.block_on(async move {
+            let listener = tokio::net::TcpListener::from_std(std_listener).expect("listener");
+            let _ = axum::serve(listener, app)
+                .with_graceful_shutdown(async {
+                    let _ = rx.await;
+                })
+                .await;
+        });
+    });
+    Ok(RunningServer {
+        addr,
+        state,
+        stop: Some(tx),
+        thread: Some(thread),
+    })
+}
+
+/// The project folder's default database path.
+pub fn default_db(dir: &Path) -> PathBuf {
+    interslice_store::default_db_path(dir)
+}

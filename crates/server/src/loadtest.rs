@@ -1,0 +1,1 @@
+//! Load test and latency benchmark (client side).

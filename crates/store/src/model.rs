@@ -1,0 +1,283 @@
+//! The records the database stores and returns.
+use interslice_core::Axis;
+use serde::{Deserialize, Serialize};
+
+/// What a user may do: tracers read and write their own tracings, reviewers
+/// also read everyone's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    /// Traces cells; sees only their own tracings.
+    Tracer,
+    /// Traces cells and reads every user's tracings.
+    Reviewer,
+}
+
+impl Role {
+    /// The name stored in the database and shown in the API.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Role::Tracer => "tracer",
+            Role::Reviewer => "reviewer",
+        }
+    }
+
+    /// Parse "tracer" or "reviewer".
+    pub fn parse(s: &str) -> Option<Role> {
+        match s {
+            "tracer" => Some(Role::Tracer),
+            "reviewer" => Some(Role::Reviewer),
+            _ => None,
+        }
+    }
+}
+
+/// A user account.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct User {
+    /// Database id.
+    pub id: i64,
+    /// Unique name, stored with every tracing.
+    pub name: String,
+    /// Tracer or reviewer.
+    pub role: Role,
+    /// Whether a password is set (required on non-loopback servers).
+    pub has_password: bool,
+}
+
+/// A cell registered from the project folder.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CellRecord {
+    /// URL-safe id (never a path).
+    pub id: String,
+    /// Path relative to the project folder.
+    pub path: String,
+    /// Content hash of the file(s), once computed.
+    pub content_hash: Option<String>,
+    /// Geometry as JSON, once the volume was read.
+    pub geometry: Option<String>,
+    /// Voxel type, once the volume was read.
+    pub dtype: Option<String>,
+}
+
+/// A label of the project (a traced structure).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Label {
+    /// The voxel value in label volumes (1..=65535).
+    pub id: u16,
+    /// Display name.
+    pub name: String,
+    /// `#rrggbb`.
+    pub color: String,
+}
+
+/// The tracing status of a cell for one user.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CellStatus {
+    /// Nothing traced yet.
+    NotStarted,
+    /// Tracing has begun.
+    InProgress,
+    /// The user finished the cell (hidden from their queue).
+    Done,
+}
+
+impl CellStatus {
+    /// The name stored and shown.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CellStatus::NotStarted => "not_started",
+            CellStatus::InProgress => "in_progress",
+            CellStatus::Done => "done",
+        }
+    }
+
+    /// Parse a stored name.
+    pub fn parse(s: &str) -> Option<CellStatus> {
+        match s {
+            "not_started" => Some(CellStatus::NotStarted),
+            "in_progress" => Some(CellStatus::InProgress),
+            "done" => Some(CellStatus::Done),
+            _ => None,
+        }
+    }
+}
+
+/// A contour as the client sends it (no id, author or time stamps yet).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NewContour {
+    /// Closed polyline of `(u, v)` points, at least 3, finite.
+    pub points: Vec<[f64; 2]>,
+    /// Pen pressure per point (same length as `points`).
+    #[serde(default)]
+    pub pressure: Option<Vec<f32>>,
+    /// Milliseconds since the stroke began, per point (same length as `points`).
+    #[serde(default)]
+    pub times_ms: Option<Vec<f64>>,
+    /// The drawing tool ("pen", "mouse", "polygon", ...).
+    #[serde(default)]
+    pub tool: Option<String>,
+}
+
+/// A stored contour.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StoredContour {
+    /// Database id.
+    pub id: i64,
+    /// Cell id.
+    pub cell: String,
+    /// Label id.
+    pub label: u16,
+    /// Slice axis.
+    pub axis: Axis,
+    /// Slice index.
+    pub index: usize,
+    /// Closed polyline of `(u, v)` points.
+    pub points: Vec<[f64; 2]>,
+    /// Pen pressure per point, if recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure: Option<Vec<f32>>,
+    /// Milliseconds since the stroke began, per point, if recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub times_ms: Option<Vec<f64>>,
+    /// Time spent drawing it (the last per-point time), if recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration_ms: Option<f64>,
+    /// The drawing tool.
+    pub tool: String,
+    /// The author's user name.
+    pub author: String,
+    /// The author's user id.
+    #[serde(skip)]
+    pub user_id: i64,
+    /// The client's idempotency key, if given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub client_id: Option<String>,
+    /// When it was first stored (RFC 3339).
+    pub created: String,
+    /// When it last changed (RFC 3339).
+    pub updated: String,
+}
+
+/// Which contours to list: one cell and one author, optionally narrowed.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ContourQuery {
+    /// Cell id.
+    pub cell: String,
+    /// Author's user id.
+    pub user_id: i64,
+    /// Only this axis.
+    pub axis: Option<Axis>,
+    /// Only this slice index (with or without `axis`).
+    pub index: Option<usize>,
+    /// Only this label.
+    pub label: Option<u16>,
+}
+
+/// Where a change happens: one label on one slice of one cell, by one user.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SliceKey {
+    /// Cell id.
+    pub cell: String,
+    /// Author's user id.
+    pub user_id: i64,
+    /// Label id.
+    pub label: u16,
+    /// Slice axis.
+    pub axis: Axis,
+    /// Slice index.
+    pub index: usize,
+}
+
+/// A drawn slice of one label: either it has contours or it was marked empty.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct DrawnSlice {
+    /// Slice index.
+    pub index: usize,
+    /// True when drawn with no contour (a known-empty slice).
+    pub empty: bool,
+}
+
+/// What undo or redo changed, if anything.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UndoOutcome {
+    /// Whether anything was undone/redone.
+    pub changed: bool,
+    /// The slice it touched.
+    pub slice: Option<(u16, Axis, usize)>,
+}
+
+/// Metadata of a stored interpolation result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ResultMeta {
+    /// Database id.
+    pub id: i64,
+    /// Cell id.
+    pub cell: String,
+    /// Author's user id.
+    pub user_id: i64,
+    /// Label id.
+    pub label: u16,
+    /// Axis of the drawn slices.
+    pub axis: Axis,
+    /// Interpolation method.
+    pub method: String,
+    /// Foreground voxels.
+    pub voxels: u64,
+    /// When computed.
+    pub created: String,
+}
+
+/// Metadata of a stored automated segmentation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SegmentationMeta {
+    /// Database id.
+    pub id: i64,
+    /// Cell id.
+    pub cell: String,
+    /// Display name.
+    pub name: String,
+    /// Method ("otsu", "rosin", ...).
+    pub method: String,
+    /// Parameters as JSON.
+    pub params: serde_json::Value,
+    /// When computed.
+    pub created: String,
+}
+
+/// A rating of an automated segmentation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Rating {
+    /// Database id.
+    pub id: i64,
+    /// Cell id.
+    pub cell: String,
+    /// Who rated.
+    pub user: String,
+    /// The segmentation rated (its id in the API).
+    pub segmentation: String,
+    /// 1..=5.
+    pub score: u8,
+    /// Free text.
+    pub comment: String,
+    /// When rated.
+    pub created: String,
+}
+
+/// One entry of the append-only audit log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AuditEntry {
+    /// Sequence number.
+    pub id: i64,
+    /// When.
+    pub at: String,
+    /// Who (user name), if a user did it.
+    pub user: Option<String>,
+    /// Which cell, if any.
+    pub cell: Option<String>,
+    /// What ("contour.add", "slice.replace", "undo", ...).
+    pub action: String,
+    /// Details as JSON.
+    pub detail: serde_json::Value,
+}
