@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Runs every test of interslice: formatting, lints, the Rust test suite, then
-# every scripts/test-*.sh (cross-checks with Python libraries, web unit and
-# end-to-end tests). Each of those installs what it needs.
+# Runs every test of interslice: formatting, the web UI build (so the binary
+# the tests build embeds the current UI), lints, the Rust test suite, then
+# every scripts/test-*.sh (cross-checks with Python libraries, the web unit
+# and end-to-end tests). Each of those installs what it needs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 echo "== cargo fmt --check"
 cargo fmt --all --check
+echo "== web UI build"
+scripts/build-web.sh
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
