@@ -53,8 +53,12 @@ fn main() {
     src.push_str("pub static ASSETS: &[(&str, &[u8])] = &[\n");
     for (rel, path) in &files {
         let abs = path.canonicalize().unwrap_or_else(|_| path.clone());
-        writeln!(src, "    ({rel:?}, include_bytes!({:?})),", abs.display().to_string())
-            .expect("write to String");
+        writeln!(
+            src,
+            "    ({rel:?}, include_bytes!({:?})),",
+            abs.display().to_string()
+        )
+        .expect("write to String");
     }
     src.push_str("];\n");
     std::fs::write(out_dir.join("assets.rs"), src).expect("write assets.rs");

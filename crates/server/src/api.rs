@@ -31,10 +31,19 @@ pub fn router() -> Router<SharedState> {
         .route("/api/cells/{cell}/histogram", get(histogram))
         .route("/api/cells/{cell}/time", post(add_time))
         .route("/api/cells/{cell}/slices/{axis}/{index}", get(slice))
-        .route("/api/cells/{cell}/contours", get(list_contours).post(add_contour))
+        .route(
+            "/api/cells/{cell}/contours",
+            get(list_contours).post(add_contour),
+        )
         .route("/api/cells/{cell}/contours/{id}", delete(delete_contour))
-        .route("/api/cells/{cell}/slices/{axis}/{index}/contours", put(replace_slice))
-        .route("/api/cells/{cell}/slices/{axis}/{index}/empty", post(mark_empty))
+        .route(
+            "/api/cells/{cell}/slices/{axis}/{index}/contours",
+            put(replace_slice),
+        )
+        .route(
+            "/api/cells/{cell}/slices/{axis}/{index}/empty",
+            post(mark_empty),
+        )
         .route("/api/cells/{cell}/drawn", get(drawn))
         .route("/api/cells/{cell}/undo", post(undo))
         .route("/api/cells/{cell}/redo", post(redo))
@@ -42,9 +51,15 @@ pub fn router() -> Router<SharedState> {
         .route("/api/cells/{cell}/results/{result}/mesh", get(result_mesh))
         .route("/api/cells/{cell}/export", get(export))
         .route("/api/cells/{cell}/evaluate", post(evaluate))
-        .route("/api/cells/{cell}/segmentations", get(list_segmentations).post(add_segmentation))
+        .route(
+            "/api/cells/{cell}/segmentations",
+            get(list_segmentations).post(add_segmentation),
+        )
         .route("/api/cells/{cell}/overlay/{axis}/{index}", get(overlay))
-        .route("/api/cells/{cell}/ratings", get(list_ratings).post(add_rating))
+        .route(
+            "/api/cells/{cell}/ratings",
+            get(list_ratings).post(add_rating),
+        )
         .route("/api", get(api_not_found))
         .route("/api/{*rest}", axum::routing::any(api_not_found))
 }
@@ -60,8 +75,9 @@ fn parse_axis(s: &str) -> Result<Axis, ApiError> {
 /// A slice index from the path: anything that is not a valid index names no
 /// slice (404).
 fn parse_index(s: &str) -> Result<usize, ApiError> {
-    s.parse::<usize>()
-        .map_err(|_| ApiError::not_found(format!("no slice '{s}' (slice indices are 0, 1, 2, ...)")))
+    s.parse::<usize>().map_err(|_| {
+        ApiError::not_found(format!("no slice '{s}' (slice indices are 0, 1, 2, ...)"))
+    })
 }
 
 fn check_slice(geometry: &Geometry, axis: Axis, index: usize) -> Result<(), ApiError> {
@@ -78,7 +94,9 @@ fn check_label(state: &SharedState, label: u16) -> Result<(), ApiError> {
     if state.store.labels()?.iter().any(|l| l.id == label) {
         Ok(())
     } else {
-        Err(ApiError::bad_request(format!("unknown label {label} (GET /api/labels)")))
+        Err(ApiError::bad_request(format!(
+            "unknown label {label} (GET /api/labels)"
+        )))
     }
 }
 
@@ -89,7 +107,9 @@ async fn blocking<T: Send + 'static>(
 }
 
 /// The interpolator called `name` (slice-wise or mesh), or the default.
-pub fn method_by_name(name: Option<&str>) -> Result<Box<dyn interslice_interp::Interpolator>, ApiError> {
+pub fn method_by_name(
+    name: Option<&str>,
+) -> Result<Box<dyn interslice_interp::Interpolator>, ApiError> {
     let name = name.unwrap_or(interslice_interp::DEFAULT_METHOD);
     interslice_interp::by_name(name)
         .or_else(|e| {
@@ -150,7 +170,9 @@ async fn add_label(
     Auth(user): Auth,
     ApiJson(body): ApiJson<NewLabel>,
 ) -> Result<Response, ApiError> {
-    let l = state.store.add_label(&body.name, body.color.as_deref(), Some(user.id))?;
+    let l = state
+        .store
+        .add_label(&body.name, body.color.as_deref(), Some(user.id))?;
     Ok((StatusCode::CREATED, Json(l)).into_response())
 }
 
@@ -225,7 +247,11 @@ async fn list_cells(
     ApiQuery(q): ApiQuery<CellsQuery>,
 ) -> Result<Json<Vec<CellSummary>>, ApiError> {
     let st = state.clone();
-    blocking(move || st.rescan().map_err(|e| ApiError::internal(format!("{e:#}")))).await?;
+    blocking(move || {
+        st.rescan()
+            .map_err(|e| ApiError::internal(format!("{e:#}")))
+    })
+    .await?;
     let ids: Vec<String> = state
         .cells
         .read()
@@ -294,9 +320,8 @@ async fn set_status(
     ApiJson(body): ApiJson<StatusBody>,
 ) -> Result<Response, ApiError> {
     state.cell_path(&cell)?;
-    let s = CellStatus::parse(&body.status).ok_or_else(|| {
-        ApiError::bad_request("status must be not_started, in_progress or done")
-    })?;
+    let s = CellStatus::parse(&body.status)
+        .ok_or_else(|| ApiError::bad_request("status must be not_started, in_progress or done"))?;
     state.store.set_status(&cell, user.id, s)?;
     Ok(Json(serde_json::json!({"status": s.as_str()})).into_response())
 }
@@ -351,17 +376,35 @@ async fn slice(
             le_bytes(&c.volume, n * index..n * (index + 1))
         }
         AnyVolume::U8(v) => v.slice(axis, index)?,
-        AnyVolume::U16(v) => v.slice(axis, index)?.iter().flat_map(|x| x.to_le_bytes()).collect(),
-        AnyVolume::I16(v) => v.slice(axis, index)?.iter().flat_map(|x| x.to_le_bytes()).collect(),
-        AnyVolume::F32(v) => v.slice(axis, index)?.iter().flat_map(|x| x.to_le_bytes()).collect(),
+        AnyVolume::U16(v) => v
+            .slice(axis, index)?
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::I16(v) => v
+            .slice(axis, index)?
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::F32(v) => v
+            .slice(axis, index)?
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
     };
     let mut resp = bytes.into_response();
     let hd = resp.headers_mut();
-    hd.insert(header::CONTENT_TYPE, HeaderValue::from_static("application/octet-stream"));
+    hd.insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/octet-stream"),
+    );
     hd.insert("x-width", HeaderValue::from(w));
     hd.insert("x-height", HeaderValue::from(h));
     hd.insert("x-dtype", HeaderValue::from_static(c.dtype()));
-    hd.insert(header::CACHE_CONTROL, HeaderValue::from_static("private, max-age=60"));
+    hd.insert(
+        header::CACHE_CONTROL,
+        HeaderValue::from_static("private, max-age=60"),
+    );
     Ok(resp)
 }
 
@@ -444,7 +487,11 @@ async fn add_contour(
         },
         body.client_id,
     )?;
-    let status = if created { StatusCode::CREATED } else { StatusCode::OK };
+    let status = if created {
+        StatusCode::CREATED
+    } else {
+        StatusCode::OK
+    };
     Ok((status, Json(stored)).into_response())
 }
 
@@ -558,9 +605,9 @@ async fn redo(
 }
 
 fn undo_json(o: interslice_store::UndoOutcome) -> Response {
-    let slice = o
-        .slice
-        .map(|(label, axis, index)| serde_json::json!({"label": label, "axis": axis, "index": index}));
+    let slice = o.slice.map(
+        |(label, axis, index)| serde_json::json!({"label": label, "axis": axis, "index": index}),
+    );
     Json(serde_json::json!({"changed": o.changed, "slice": slice})).into_response()
 }
 
@@ -633,9 +680,9 @@ async fn interpolate(
             method.as_ref(),
         )?;
         let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
-        let result_id = st
-            .store
-            .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?;
+        let result_id =
+            st.store
+                .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?;
         let (w, h) = mask.slice_shape(axis);
         use rayon::prelude::*;
         let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
@@ -686,13 +733,15 @@ async fn result_mesh(
         let mesh = interslice_interp::mesh::mask_surface(&mask);
         let vertices: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-        Ok(serde_json::to_vec(&serde_json::json!({"vertices": vertices, "indices": indices}))
-            .map_err(|e| ApiError::internal(e.to_string()))?)
+        serde_json::to_vec(&serde_json::json!({"vertices": vertices, "indices": indices}))
+            .map_err(|e| ApiError::internal(e.to_string()))
     })
     .await?;
     let mut resp = body.into_response();
-    resp.headers_mut()
-        .insert(header::CONTENT_TYPE, HeaderValue::from_static("application/json"));
+    resp.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
     Ok(resp)
 }
 
@@ -734,7 +783,8 @@ pub fn export_bytes(
         }
     };
     let m = method_by_name(method)?;
-    let labels = groundtruth::label_volume(&state.store, geometry, cell, user.id, m.as_ref(), label)?;
+    let labels =
+        groundtruth::label_volume(&state.store, geometry, cell, user.id, m.as_ref(), label)?;
     let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
     let name = format!("{base}.{ext}");
     let path = dir.path().join(&name);
@@ -817,7 +867,8 @@ async fn export(
     } else {
         "application/octet-stream"
     };
-    resp.headers_mut().insert(header::CONTENT_TYPE, HeaderValue::from_static(ct));
+    resp.headers_mut()
+        .insert(header::CONTENT_TYPE, HeaderValue::from_static(ct));
     resp.headers_mut().insert(
         header::CONTENT_DISPOSITION,
         HeaderValue::from_str(&format!("attachment; filename=\"{name}\""))
@@ -883,10 +934,14 @@ fn resolve_source(
     label: u16,
     method: Option<&str>,
 ) -> Result<Arc<LabelVolume>, ApiError> {
-    let given = [src.user.is_some(), src.path.is_some(), src.segmentation.is_some()]
-        .iter()
-        .filter(|&&b| b)
-        .count();
+    let given = [
+        src.user.is_some(),
+        src.path.is_some(),
+        src.segmentation.is_some(),
+    ]
+    .iter()
+    .filter(|&&b| b)
+    .count();
     if given != 1 {
         return Err(ApiError::bad_request(
             "each side names exactly one of user, path or segmentation",
@@ -928,8 +983,12 @@ async fn evaluate(
         let m = body.method.as_deref();
         let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m)?;
         let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m)?;
-        let tol = body.tolerance.unwrap_or(interslice_core::metrics::DEFAULT_TOLERANCE);
-        Ok(interslice_core::metrics::evaluate_label(&r, &t, body.label, tol)?)
+        let tol = body
+            .tolerance
+            .unwrap_or(interslice_core::metrics::DEFAULT_TOLERANCE);
+        Ok(interslice_core::metrics::evaluate_label(
+            &r, &t, body.label, tol,
+        )?)
     })
     .await?;
     Ok(Json(metrics).into_response())
@@ -961,7 +1020,10 @@ fn segmentation_files(state: &SharedState, cell: &str) -> Vec<String> {
             rd.flatten()
                 .filter(|e| e.path().is_file())
                 .map(|e| e.file_name().to_string_lossy().to_string())
-                .filter(|n| !n.starts_with('.') && interslice_io::Format::of_path(std::path::Path::new(n)).is_ok())
+                .filter(|n| {
+                    !n.starts_with('.')
+                        && interslice_io::Format::of_path(std::path::Path::new(n)).is_ok()
+                })
                 .collect()
         })
         .unwrap_or_default();
@@ -972,7 +1034,9 @@ fn segmentation_files(state: &SharedState, cell: &str) -> Vec<String> {
 fn load_segmentation(state: &SharedState, cell: &str, id: &str) -> Result<LabelVolume, ApiError> {
     if let Some(name) = id.strip_prefix("file:") {
         if !segmentation_files(state, cell).iter().any(|n| n == name) {
-            return Err(ApiError::not_found(format!("no segmentation file '{name}'")));
+            return Err(ApiError::not_found(format!(
+                "no segmentation file '{name}'"
+            )));
         }
         let rel = safe_relative_path(name)?;
         return Ok(interslice_io::read_labels(
@@ -1070,9 +1134,14 @@ async fn add_segmentation(
         if p.smooth_sigma > 0.0 {
             name.push_str(&format!(" σ={}", p.smooth_sigma));
         }
-        let meta = st
-            .store
-            .save_segmentation(&cell, &name, p.method.name(), &params, &labels, Some(me.id))?;
+        let meta = st.store.save_segmentation(
+            &cell,
+            &name,
+            p.method.name(),
+            &params,
+            &labels,
+            Some(me.id),
+        )?;
         Ok(SegmentationInfo {
             id: meta.id.to_string(),
             name: meta.name,
@@ -1136,7 +1205,10 @@ async fn overlay(
     .await?;
     let mut resp = bytes.into_response();
     let hd = resp.headers_mut();
-    hd.insert(header::CONTENT_TYPE, HeaderValue::from_static("application/octet-stream"));
+    hd.insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/octet-stream"),
+    );
     hd.insert("x-width", HeaderValue::from(w));
     hd.insert("x-height", HeaderValue::from(h));
     hd.insert("x-dtype", HeaderValue::from_static("u8"));
@@ -1175,17 +1247,13 @@ async fn add_rating(
         && segmentation_files(&state, &cell)
             .iter()
             .any(|f| Some(f.as_str()) == body.segmentation.strip_prefix("file:"))
-        || body
-            .segmentation
-            .parse::<i64>()
-            .ok()
-            .is_some_and(|id| {
-                state
-                    .store
-                    .segmentations(&cell)
-                    .map(|s| s.iter().any(|s| s.id == id))
-                    .unwrap_or(false)
-            });
+        || body.segmentation.parse::<i64>().ok().is_some_and(|id| {
+            state
+                .store
+                .segmentations(&cell)
+                .map(|s| s.iter().any(|s| s.id == id))
+                .unwrap_or(false)
+        });
     if !known {
         return Err(ApiError::not_found(format!(
             "no segmentation '{}' on cell '{cell}'",

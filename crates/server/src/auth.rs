@@ -81,7 +81,10 @@ fn cookie(token: &str, max_age: i64) -> HeaderValue {
 }
 
 /// `POST /api/login`.
-pub async fn login(State(state): State<SharedState>, ApiJson(body): ApiJson<LoginBody>) -> Result<Response, ApiError> {
+pub async fn login(
+    State(state): State<SharedState>,
+    ApiJson(body): ApiJson<LoginBody>,
+) -> Result<Response, ApiError> {
     let st = state.clone();
     let user = tokio::task::spawn_blocking(move || -> Result<User, ApiError> {
         if st.auth_required {
@@ -98,12 +101,16 @@ pub async fn login(State(state): State<SharedState>, ApiJson(body): ApiJson<Logi
     let token = state.store.create_session(user.id)?;
     let mut resp = axum::Json(serde_json::json!({"name": user.name, "role": user.role.as_str()}))
         .into_response();
-    resp.headers_mut().insert(SET_COOKIE, cookie(&token, 30 * 24 * 3600));
+    resp.headers_mut()
+        .insert(SET_COOKIE, cookie(&token, 30 * 24 * 3600));
     Ok(resp)
 }
 
 /// `POST /api/logout`.
-pub async fn logout(State(state): State<SharedState>, headers: HeaderMap) -> Result<Response, ApiError> {
+pub async fn logout(
+    State(state): State<SharedState>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
     if let Some(t) = session_token(&headers) {
         state.store.delete_session(&t)?;
     }
@@ -123,7 +130,11 @@ pub async fn me(State(state): State<SharedState>, Auth(user): Auth) -> axum::Jso
 
 /// The user whose tracings to read: the signed-in user, or with `?user=` another
 /// user (reviewers only; 403 otherwise, 404 if unknown).
-pub fn reader_target(state: &SharedState, me: &User, other: Option<&str>) -> Result<User, ApiError> {
+pub fn reader_target(
+    state: &SharedState,
+    me: &User,
+    other: Option<&str>,
+) -> Result<User, ApiError> {
     match other {
         None => Ok(me.clone()),
         Some(name) if name == me.name => Ok(me.clone()),

@@ -13,7 +13,16 @@ pub const RESERVED_DIRS: [&str; 3] = [".interslice", "ground_truth", "segmentati
 
 /// Volume file extensions, longest first, stripped to make a cell id.
 const EXTENSIONS: [&str; 11] = [
-    ".ome.tiff", ".ome.tif", ".nii.gz", ".nrrd", ".nhdr", ".tiff", ".nii", ".mha", ".mhd", ".tif",
+    ".ome.tiff",
+    ".ome.tif",
+    ".nii.gz",
+    ".nrrd",
+    ".nhdr",
+    ".tiff",
+    ".nii",
+    ".mha",
+    ".mhd",
+    ".tif",
     ".dcm",
 ];
 
@@ -74,7 +83,9 @@ pub fn safe_relative_path(p: &str) -> Result<PathBuf, ApiError> {
         }
     }
     if p.split(['/', '\\']).any(|s| s == "..") {
-        return Err(ApiError::bad_request(format!("paths may not contain '..': '{p}'")));
+        return Err(ApiError::bad_request(format!(
+            "paths may not contain '..': '{p}'"
+        )));
     }
     Ok(path.to_path_buf())
 }
@@ -152,7 +163,11 @@ fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
             |mut acc, chunk| {
                 for &x in chunk {
                     let b = ((x.to_f64() - min) / width).floor();
-                    let b = if b.is_finite() { b.clamp(0.0, 255.0) as usize } else { 0 };
+                    let b = if b.is_finite() {
+                        b.clamp(0.0, 255.0) as usize
+                    } else {
+                        0
+                    };
                     acc[b] += 1;
                 }
                 acc
@@ -171,9 +186,18 @@ fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
 pub fn le_bytes(v: &AnyVolume, range: std::ops::Range<usize>) -> Vec<u8> {
     match v {
         AnyVolume::U8(v) => v.data()[range].to_vec(),
-        AnyVolume::U16(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
-        AnyVolume::I16(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
-        AnyVolume::F32(v) => v.data()[range].iter().flat_map(|x| x.to_le_bytes()).collect(),
+        AnyVolume::U16(v) => v.data()[range]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::I16(v) => v.data()[range]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
+        AnyVolume::F32(v) => v.data()[range]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect(),
     }
 }
 

@@ -73,7 +73,9 @@ impl From<StoreError> for ApiError {
 impl From<interslice_core::CoreError> for ApiError {
     fn from(e: interslice_core::CoreError) -> ApiError {
         match e {
-            interslice_core::CoreError::SliceOutOfRange { .. } => ApiError::not_found(e.to_string()),
+            interslice_core::CoreError::SliceOutOfRange { .. } => {
+                ApiError::not_found(e.to_string())
+            }
             _ => ApiError::bad_request(e.to_string()),
         }
     }
@@ -105,16 +107,17 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     type Rejection = ApiError;
 
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
-        let bytes = axum::body::Bytes::from_request(req, state)
-            .await
-            .map_err(|e: BytesRejection| {
-                let status = e.status();
-                if status == StatusCode::PAYLOAD_TOO_LARGE {
-                    ApiError::new(status, "request body is too large")
-                } else {
-                    ApiError::new(status, e.body_text())
-                }
-            })?;
+        let bytes =
+            axum::body::Bytes::from_request(req, state)
+                .await
+                .map_err(|e: BytesRejection| {
+                    let status = e.status();
+                    if status == StatusCode::PAYLOAD_TOO_LARGE {
+                        ApiError::new(status, "request body is too large")
+                    } else {
+                        ApiError::new(status, e.body_text())
+                    }
+                })?;
         serde_json::from_slice(&bytes)
             .map(ApiJson)
             .map_err(|e| ApiError::bad_request(format!("malformed JSON body: {e}")))

@@ -105,7 +105,9 @@ pub fn label_volume(
     if best.is_empty() {
         return Err(ApiError::not_found(format!(
             "nothing traced on cell '{cell}' by this user{}",
-            only_label.map(|l| format!(" for label {l}")).unwrap_or_default()
+            only_label
+                .map(|l| format!(" for label {l}"))
+                .unwrap_or_default()
         )));
     }
     best.sort_by_key(|b| b.0);
@@ -150,7 +152,12 @@ impl GtCache {
         only_label: Option<u16>,
     ) -> Result<Arc<LabelVolume>, ApiError> {
         let rev = store.revision(cell, user_id)?;
-        let key: GtKey = (cell.to_string(), user_id, method.name().to_string(), only_label);
+        let key: GtKey = (
+            cell.to_string(),
+            user_id,
+            method.name().to_string(),
+            only_label,
+        );
         {
             let entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
             if let Some((_, r, v)) = entries.iter().find(|(k, _, _)| *k == key)
@@ -159,7 +166,9 @@ impl GtCache {
                 return Ok(v.clone());
             }
         }
-        let v = Arc::new(label_volume(store, geometry, cell, user_id, method, only_label)?);
+        let v = Arc::new(label_volume(
+            store, geometry, cell, user_id, method, only_label,
+        )?);
         let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
         entries.retain(|(k, _, _)| *k != key);
         entries.push_back((key, rev, v.clone()));

@@ -175,12 +175,14 @@ pub fn app(state: SharedState, config: &Config) -> Router {
             axum::http::StatusCode::REQUEST_TIMEOUT,
             config.timeout,
         ))
-        .layer(CatchPanicLayer::custom(|_err: Box<dyn std::any::Any + Send>| {
-            error::error_response(
-                axum::http::StatusCode::INTERNAL_SERVER_ERROR,
-                "internal error (a bug; the request was not applied)",
-            )
-        }))
+        .layer(CatchPanicLayer::custom(
+            |_err: Box<dyn std::any::Any + Send>| {
+                error::error_response(
+                    axum::http::StatusCode::INTERNAL_SERVER_ERROR,
+                    "internal error (a bug; the request was not applied)",
+                )
+            },
+        ))
         .with_state(state)
 }
 

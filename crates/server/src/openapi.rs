@@ -5,42 +5,78 @@ use axum::response::{IntoResponse, Response};
 use utoipa::openapi::path::{HttpMethod, OperationBuilder, ParameterBuilder, ParameterIn};
 use utoipa::openapi::request_body::RequestBodyBuilder;
 use utoipa::openapi::{
-    ComponentsBuilder, ContentBuilder, InfoBuilder, OpenApi, OpenApiBuilder, Paths, Ref,
-    ResponseBuilder, Required,
+    ComponentsBuilder, ContentBuilder, InfoBuilder, OpenApi, OpenApiBuilder, Paths, Ref, Required,
+    ResponseBuilder,
 };
 
-/// (method, path, tag, summary, request body schema, answer content type)
-pub const ROUTES: &[(&str, &str, &str, &str, Option<&str>, &str)] = &[
-    ("POST", "/api/login", "session", "Sign in; sets the interslice_session cookie", Some("LoginBody"), "application/json"),
-    ("POST", "/api/logout", "session", "Sign out", None, ""),
-    ("GET", "/api/me", "session", "The signed-in user", None, "application/json"),
-    ("GET", "/api/openapi.json", "meta", "This document", None, "application/json"),
-    ("GET", "/api/methods", "interpolation", "Interpolation methods, the default first", None, "application/json"),
-    ("GET", "/api/labels", "labels", "The project's labels", None, "application/json"),
-    ("POST", "/api/labels", "labels", "Add a label", Some("NewLabel"), "application/json"),
-    ("GET", "/api/cells", "cells", "Cells with the user's status (queue=true hides finished ones)", None, "application/json"),
-    ("GET", "/api/cells/{cell}", "cells", "A cell's metadata, range and labels", None, "application/json"),
-    ("PUT", "/api/cells/{cell}/status", "cells", "Set the user's status of a cell", None, "application/json"),
-    ("GET", "/api/cells/{cell}/histogram", "cells", "256-bin intensity histogram", None, "application/json"),
-    ("POST", "/api/cells/{cell}/time", "cells", "Add tracing time (seconds)", None, "application/json"),
-    ("GET", "/api/cells/{cell}/slices/{axis}/{index}", "cells", "Raw little-endian slice pixels (X-Width, X-Height, X-Dtype)", None, "application/octet-stream"),
-    ("GET", "/api/cells/{cell}/contours", "contours", "The user's contours (reviewers: ?user=)", None, "application/json"),
-    ("POST", "/api/cells/{cell}/contours", "contours", "Add a contour (client_id makes retries idempotent)", Some("AddContour"), "application/json"),
-    ("DELETE", "/api/cells/{cell}/contours/{id}", "contours", "Delete one of the user's contours", None, ""),
-    ("PUT", "/api/cells/{cell}/slices/{axis}/{index}/contours", "contours", "Replace a label's contours on a slice", Some("ReplaceSlice"), "application/json"),
-    ("POST", "/api/cells/{cell}/slices/{axis}/{index}/empty", "contours", "Mark a slice drawn with no contour for a label", None, "application/json"),
-    ("GET", "/api/cells/{cell}/drawn", "contours", "Drawn slices of a label along an axis", None, "application/json"),
-    ("POST", "/api/cells/{cell}/undo", "contours", "Undo the user's last change", None, "application/json"),
-    ("POST", "/api/cells/{cell}/redo", "contours", "Redo the user's last undone change", None, "application/json"),
-    ("POST", "/api/cells/{cell}/interpolate", "interpolation", "Interpolate a label; preview contours per slice", Some("InterpolateBody"), "application/json"),
-    ("GET", "/api/cells/{cell}/results/{result}/mesh", "interpolation", "Surface mesh of a result, physical units", None, "application/json"),
-    ("GET", "/api/cells/{cell}/export", "interpolation", "Download the interpolated label volume or the contours", None, "application/octet-stream"),
-    ("POST", "/api/cells/{cell}/evaluate", "evaluation", "Metrics of a test against a reference", Some("EvaluateBody"), "application/json"),
-    ("GET", "/api/cells/{cell}/segmentations", "evaluation", "Computed segmentations and files under segmentations/<cell>/", None, "application/json"),
-    ("POST", "/api/cells/{cell}/segmentations", "evaluation", "Compute a threshold segmentation", Some("SegmentBody"), "application/json"),
-    ("GET", "/api/cells/{cell}/overlay/{axis}/{index}", "evaluation", "u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN", None, "application/octet-stream"),
-    ("GET", "/api/cells/{cell}/ratings", "evaluation", "Ratings of the cell's segmentations", None, "application/json"),
-    ("POST", "/api/cells/{cell}/ratings", "evaluation", "Rate a segmentation 1..5", Some("RatingBody"), "application/json"),
+/// One documented route.
+#[derive(Debug, Clone, Copy)]
+pub struct Route {
+    /// "GET", "POST", "PUT" or "DELETE".
+    pub method: &'static str,
+    /// Path with `{param}` placeholders, as in `api::router`.
+    pub path: &'static str,
+    /// Group in the document.
+    pub tag: &'static str,
+    /// One line.
+    pub summary: &'static str,
+    /// Schema name of the JSON request body, if any.
+    pub body: Option<&'static str>,
+    /// Content type of a success answer (empty: 204 without body).
+    pub answer: &'static str,
+}
+
+const fn r(
+    method: &'static str,
+    path: &'static str,
+    tag: &'static str,
+    summary: &'static str,
+    body: Option<&'static str>,
+    answer: &'static str,
+) -> Route {
+    Route {
+        method,
+        path,
+        tag,
+        summary,
+        body,
+        answer,
+    }
+}
+
+/// Every route of the API, in the order of `api::router`.
+#[rustfmt::skip]
+pub const ROUTES: &[Route] = &[
+    r("POST", "/api/login", "session", "Sign in; sets the interslice_session cookie", Some("LoginBody"), "application/json"),
+    r("POST", "/api/logout", "session", "Sign out", None, ""),
+    r("GET", "/api/me", "session", "The signed-in user", None, "application/json"),
+    r("GET", "/api/openapi.json", "meta", "This document", None, "application/json"),
+    r("GET", "/api/methods", "interpolation", "Interpolation methods, the default first", None, "application/json"),
+    r("GET", "/api/labels", "labels", "The project's labels", None, "application/json"),
+    r("POST", "/api/labels", "labels", "Add a label", Some("NewLabel"), "application/json"),
+    r("GET", "/api/cells", "cells", "Cells with the user's status (queue=true hides finished ones)", None, "application/json"),
+    r("GET", "/api/cells/{cell}", "cells", "A cell's metadata, range and labels", None, "application/json"),
+    r("PUT", "/api/cells/{cell}/status", "cells", "Set the user's status of a cell", None, "application/json"),
+    r("GET", "/api/cells/{cell}/histogram", "cells", "256-bin intensity histogram", None, "application/json"),
+    r("POST", "/api/cells/{cell}/time", "cells", "Add tracing time (seconds)", None, "application/json"),
+    r("GET", "/api/cells/{cell}/slices/{axis}/{index}", "cells", "Raw little-endian slice pixels (X-Width, X-Height, X-Dtype)", None, "application/octet-stream"),
+    r("GET", "/api/cells/{cell}/contours", "contours", "The user's contours (reviewers: ?user=)", None, "application/json"),
+    r("POST", "/api/cells/{cell}/contours", "contours", "Add a contour (client_id makes retries idempotent)", Some("AddContour"), "application/json"),
+    r("DELETE", "/api/cells/{cell}/contours/{id}", "contours", "Delete one of the user's contours", None, ""),
+    r("PUT", "/api/cells/{cell}/slices/{axis}/{index}/contours", "contours", "Replace a label's contours on a slice", Some("ReplaceSlice"), "application/json"),
+    r("POST", "/api/cells/{cell}/slices/{axis}/{index}/empty", "contours", "Mark a slice drawn with no contour for a label", None, "application/json"),
+    r("GET", "/api/cells/{cell}/drawn", "contours", "Drawn slices of a label along an axis", None, "application/json"),
+    r("POST", "/api/cells/{cell}/undo", "contours", "Undo the user's last change", None, "application/json"),
+    r("POST", "/api/cells/{cell}/redo", "contours", "Redo the user's last undone change", None, "application/json"),
+    r("POST", "/api/cells/{cell}/interpolate", "interpolation", "Interpolate a label; preview contours per slice", Some("InterpolateBody"), "application/json"),
+    r("GET", "/api/cells/{cell}/results/{result}/mesh", "interpolation", "Surface mesh of a result, physical units", None, "application/json"),
+    r("GET", "/api/cells/{cell}/export", "interpolation", "Download the interpolated label volume or the contours", None, "application/octet-stream"),
+    r("POST", "/api/cells/{cell}/evaluate", "evaluation", "Metrics of a test against a reference", Some("EvaluateBody"), "application/json"),
+    r("GET", "/api/cells/{cell}/segmentations", "evaluation", "Computed segmentations and files under segmentations/<cell>/", None, "application/json"),
+    r("POST", "/api/cells/{cell}/segmentations", "evaluation", "Compute a threshold segmentation", Some("SegmentBody"), "application/json"),
+    r("GET", "/api/cells/{cell}/overlay/{axis}/{index}", "evaluation", "u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN", None, "application/octet-stream"),
+    r("GET", "/api/cells/{cell}/ratings", "evaluation", "Ratings of the cell's segmentations", None, "application/json"),
+    r("POST", "/api/cells/{cell}/ratings", "evaluation", "Rate a segmentation 1..5", Some("RatingBody"), "application/json"),
 ];
 
 fn method(m: &str) -> HttpMethod {
@@ -55,14 +91,23 @@ fn method(m: &str) -> HttpMethod {
 /// Build the document.
 pub fn document() -> OpenApi {
     let mut paths = Paths::new();
-    for &(m, path, tag, summary, body, answer) in ROUTES {
+    for &Route {
+        method: m,
+        path,
+        tag,
+        summary,
+        body,
+        answer,
+    } in ROUTES
+    {
         let mut op = OperationBuilder::new()
             .summary(Some(summary))
             .tag(tag)
             .operation_id(Some(format!(
                 "{}_{}",
                 m.to_ascii_lowercase(),
-                path.trim_start_matches("/api/").replace(['/', '{', '}', '.'], "_")
+                path.trim_start_matches("/api/")
+                    .replace(['/', '{', '}', '.'], "_")
             )));
         for seg in path.split('/') {
             if let Some(name) = seg.strip_prefix('{').and_then(|s| s.strip_suffix('}')) {

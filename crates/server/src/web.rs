@@ -39,17 +39,17 @@ async fn serve(uri: Uri) -> Response {
     let (name, bytes) = match asset(path) {
         Some(b) => (path, b),
         // Client-side routes get the app; missing files with an extension are 404.
-        None if !path.rsplit('/').next().unwrap_or("").contains('.') => {
-            match asset("index.html") {
-                Some(b) => ("index.html", b),
-                None => return StatusCode::NOT_FOUND.into_response(),
-            }
-        }
+        None if !path.rsplit('/').next().unwrap_or("").contains('.') => match asset("index.html") {
+            Some(b) => ("index.html", b),
+            None => return StatusCode::NOT_FOUND.into_response(),
+        },
         None => return (StatusCode::NOT_FOUND, "not found").into_response(),
     };
     let mut resp = bytes.into_response();
-    resp.headers_mut()
-        .insert(header::CONTENT_TYPE, HeaderValue::from_static(content_type(name)));
+    resp.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static(content_type(name)),
+    );
     let cache = if name == "index.html" {
         "no-cache"
     } else if name.starts_with("assets/") {

@@ -494,7 +494,7 @@ impl Store {
     pub fn upsert_user(&self, name: &str, role: Role, password: Option<&str>) -> Result<User> {
         validate_name(name)?;
         let hash = match password {
-            Some(p) if p.is_empty() => {
+            Some("") => {
                 return Err(StoreError::Invalid("the password is empty".into()));
             }
             Some(p) => {
@@ -1157,7 +1157,9 @@ impl Store {
     pub fn revision(&self, cell: &str, user_id: i64) -> Result<i64> {
         self.read(|tx| {
             Ok(tx
-                .prepare_cached("SELECT COALESCE(MAX(id), 0) FROM audit WHERE cell = ?1 AND user_id = ?2")?
+                .prepare_cached(
+                    "SELECT COALESCE(MAX(id), 0) FROM audit WHERE cell = ?1 AND user_id = ?2",
+                )?
                 .query_row(params![cell, user_id], |r| r.get(0))?)
         })
     }

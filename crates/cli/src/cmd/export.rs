@@ -49,16 +49,14 @@ pub fn run(a: Args) -> Result<()> {
     let geometry = cell.volume.geometry();
     let name = a.out.to_string_lossy().to_ascii_lowercase();
     if name.ends_with(".contours.json") || name.ends_with(".json") {
-        let text = interslice_server::api::contours_json(&state, &a.cell, geometry, &user)
-            ?;
+        let text = interslice_server::api::contours_json(&state, &a.cell, geometry, &user)?;
         interslice_io::raw::write_atomic(&a.out, |w| {
             use std::io::Write as _;
             w.write_all(text.as_bytes())
         })
-            .with_context(|| format!("writing {}", a.out.display()))?;
+        .with_context(|| format!("writing {}", a.out.display()))?;
     } else {
-        let method = interslice_server::api::method_by_name(a.method.as_deref())
-            ?;
+        let method = interslice_server::api::method_by_name(a.method.as_deref())?;
         let labels = interslice_server::groundtruth::label_volume(
             &state.store,
             geometry,
@@ -66,8 +64,7 @@ pub fn run(a: Args) -> Result<()> {
             user.id,
             method.as_ref(),
             a.label,
-        )
-        ?;
+        )?;
         if labels.data().iter().all(|&v| v == 0) {
             bail!("the interpolated volume is empty");
         }

@@ -73,7 +73,11 @@ pub fn run(a: Args) -> Result<()> {
             if password.chars().count() < 8 {
                 bail!("the password must have at least 8 characters");
             }
-            let role = if reviewer { Role::Reviewer } else { Role::Tracer };
+            let role = if reviewer {
+                Role::Reviewer
+            } else {
+                Role::Tracer
+            };
             let user = store.upsert_user(&name, role, Some(&password))?;
             println!("user '{}' ({})", user.name, role.as_str());
         }
