@@ -439,6 +439,69 @@ mod tests {
         (sizes.len(), sizes)
     }
 
+    /// Hole filling by brute force: flood the face-connected background from
+    /// every border voxel (of dimensions longer than one voxel, as
+    /// `fill_holes` defines the border); whatever background is not reached is a hole.
+    fn brute_fill(m: &Mask) -> Vec<bool> {
+        let [nx, ny, nz] = m.dims();
+        let g = m.geometry();
+        let on_border = |i: usize, j: usize, k: usize| {
+            (nx > 1 && (i == 0 || i == nx - 1))
+                || (ny > 1 && (j == 0 || j == ny - 1))
+                || (nz > 1 && (k == 0 || k == nz - 1))
+        };
+        let mut reached = vec![false; m.data().len()];
+        let mut stack: Vec<usize> = (0..reached.len())
+            .filter(|&p| {
+                let [i, j, k] = g.ijk(p);
+                !m.data()[p] && on_border(i, j, k)
+            })
+            .collect();
+        for &p in &stack {
+            reached[p] = true;
+        }
+        while let Some(p) = stack.pop() {
+            let [i, j, k] = g.ijk(p);
+            let steps: [(i64, i64, i64); 6] = [
+                (-1, 0, 0),
+                (1, 0, 0),
+                (0, -1, 0),
+                (0, 1, 0),
+                (0, 0, -1),
+                (0, 0, 1),
+            ];
+            for (di, dj, dk) in steps {
+                let (a, b, c) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
+                if a < 0 || b < 0 || c < 0 || a >= nx as i64 || b >= ny as i64 || c >= nz as i64 {
+                    continue;
+                }
+                let q = g.index(a as usize, b as usize, c as usize);
+                if !m.data()[q] && !reached[q] {
+                    reached[q] = true;
+                    stack.push(q);
+                }
+            }
+        }
+        m.data()
+            .iter()
+            .zip(&reached)
+            .map(|(&f, &r)| f || !r)
+            .collect()
+    }
+
+    proptest! {
+        #[test]
+        fn fill_holes_matches_brute_force(nx in 1usize..8, ny in 1usize..8, nz in 1usize..7, seed in any::<u64>(), density in 1u64..4) {
+            let n = nx * ny * nz;
+            // Dense masks (up to 3/4 foreground) so that enclosed background occurs.
+            let data: Vec<bool> = (0..n).map(|i| (seed.wrapping_mul(6364136223846793005).wrapping_add((i as u64).wrapping_mul(1442695040888963407)) >> 62) < density).collect();
+            let m = mask([nx, ny, nz], data);
+            let f = fill_holes(&m, Connectivity::Face);
+            let want = brute_fill(&m);
+            prop_assert_eq!(f.data(), want.as_slice());
+        }
+    }
+
     proptest! {
         #[test]
         fn components_match_flood_fill(nx in 1usize..7, ny in 1usize..7, nz in 1usize..6, seed in any::<u64>(), full in any::<bool>()) {

@@ -350,6 +350,71 @@ mod tests {
         assert!(s.posterior[0b001] > 0.5);
     }
 
+    /// Recovery over several seeds, numbers of raters and qualities: every
+    /// estimated sensitivity and specificity within 0.02 of the truth.
+    #[test]
+    fn recovery_holds_over_seeds() {
+        let truth = ellipsoid(40, [15.0, 12.0, 9.0]);
+        let mut worst = 0.0f64;
+        for seed in 0..8u64 {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(100 + seed);
+            let r = 3 + (seed as usize % 4);
+            let pq: Vec<(f64, f64)> = (0..r)
+                .map(|_| (rng.gen_range(0.75..0.99), rng.gen_range(0.95..0.999)))
+                .collect();
+            let raters: Vec<Mask> = pq
+                .iter()
+                .enumerate()
+                .map(|(j, &(p, q))| flip(&truth, p, q, seed * 31 + j as u64))
+                .collect();
+            let refs: Vec<&Mask> = raters.iter().collect();
+            let s = staple(&refs, StapleParams::default()).unwrap();
+            assert!(s.converged, "seed {seed}");
+            for (j, &(p, q)) in pq.iter().enumerate() {
+                let (ep, eq) = ((s.sensitivity[j] - p).abs(), (s.specificity[j] - q).abs());
+                worst = worst.max(ep).max(eq);
+                assert!(
+                    ep < 0.02,
+                    "seed {seed} rater {j}: p {} vs {p}",
+                    s.sensitivity[j]
+                );
+                assert!(
+                    eq < 0.02,
+                    "seed {seed} rater {j}: q {} vs {q}",
+                    s.specificity[j]
+                );
+            }
+        }
+        eprintln!("largest sensitivity/specificity error over the seeds: {worst:.4}");
+    }
+
+    /// Three noisy copies of the phantom's nucleus (label 2 and the nucleoli
+    /// inside it), each with its own error rates: STAPLE weighs the careful
+    /// copy more and beats the majority vote.
+    #[test]
+    fn phantom_nucleus_consensus_beats_majority_vote() {
+        let ph = crate::phantom::generate(&crate::phantom::PhantomParams {
+            size: 64,
+            seed: 3,
+            bits: 8,
+            noise: 0.02,
+        })
+        .unwrap();
+        let nucleus = ph.labels.map(|l| l >= 2);
+        let copies = [
+            flip(&nucleus, 0.98, 0.999, 21),
+            flip(&nucleus, 0.80, 0.995, 22),
+            flip(&nucleus, 0.75, 0.99, 23),
+        ];
+        let refs: Vec<&Mask> = copies.iter().collect();
+        let s = staple(&refs, StapleParams::default()).unwrap();
+        let mv = majority_vote(&refs).unwrap();
+        let (ds, dm) = (dice(&s.consensus, &nucleus), dice(&mv, &nucleus));
+        eprintln!("phantom nucleus: STAPLE Dice {ds:.4}, majority vote Dice {dm:.4}");
+        assert!(ds > dm, "STAPLE {ds} vs majority {dm}");
+        assert!(ds > 0.97, "{ds}");
+    }
+
     #[test]
     fn identical_raters_and_labels() {
         let truth = ellipsoid(16, [5.0, 4.0, 3.0]);
