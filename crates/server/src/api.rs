@@ -55,6 +55,10 @@ pub fn router() -> Router<SharedState> {
             "/api/cells/{cell}/segmentations",
             get(list_segmentations).post(add_segmentation),
         )
+        .route(
+            "/api/cells/{cell}/segmentations/upload",
+            post(upload_segmentation),
+        )
         .route("/api/cells/{cell}/overlay/{axis}/{index}", get(overlay))
         .route(
             "/api/cells/{cell}/ratings",
@@ -456,6 +460,9 @@ pub struct AddContour {
     /// "pen", "mouse", ...
     #[serde(default)]
     pub tool: Option<String>,
+    /// Time spent drawing it in ms (default: the last of `times_ms`).
+    #[serde(default)]
+    pub duration_ms: Option<f64>,
     /// Idempotency key: a retry with the same key returns the stored contour.
     #[serde(default)]
     pub client_id: Option<String>,
@@ -484,6 +491,7 @@ async fn add_contour(
             pressure: body.pressure,
             times_ms: body.times_ms,
             tool: body.tool,
+            duration_ms: body.duration_ms,
         },
         body.client_id,
     )?;
@@ -846,10 +854,26 @@ async fn export(
     ApiQuery(q): ApiQuery<ExportQuery>,
 ) -> Result<Response, ApiError> {
     let c = state.cell(&cell).await?;
-    let target = reader_target(&state, &me, q.user.as_deref())?;
+    // The STAPLE consensus of every user's tracing (reviewers only).
+    let consensus = q
+        .user
+        .as_deref()
+        .is_some_and(|u| u.eq_ignore_ascii_case(interslice_store::CONSENSUS));
+    let target = if consensus {
+        me.clone()
+    } else {
+        reader_target(&state, &me, q.user.as_deref())?
+    };
     let format = q.format.unwrap_or_else(|| "nii.gz".to_string());
     let st = state.clone();
     let (bytes, name) = blocking(move || {
+        if consensus {
+            let m = method_by_name(q.method.as_deref())?;
+            let g = c.volume.geometry();
+            return crate::consensus::export_bytes(
+                &st.store, &target, &cell, g, &format, m.as_ref(), q.label,
+            );
+        }
         export_bytes(
             &st,
             &cell,
@@ -1080,6 +1104,63 @@ async fn list_segmentations(
         });
     }
     Ok(Json(out))
+}
+
+#[derive(Deserialize)]
+struct UploadQuery {
+    name: String,
+}
+
+/// `POST /api/cells/{cell}/segmentations/upload?name=FILE`: the body is a
+/// label volume file (its format from `name`'s extension) on the cell's grid;
+/// it is stored like a computed segmentation and evaluated or rated by its id.
+async fn upload_segmentation(
+    State(state): State<SharedState>,
+    Auth(me): Auth,
+    ApiPath(cell): ApiPath<String>,
+    ApiQuery(q): ApiQuery<UploadQuery>,
+    body: Result<axum::body::Bytes, axum::extract::rejection::BytesRejection>,
+) -> Result<Response, ApiError> {
+    let body = body.map_err(crate::error::body_rejection)?;
+    let rel = safe_relative_path(&q.name)?;
+    if rel.components().count() != 1 {
+        return Err(ApiError::bad_request(format!(
+            "name '{}' must be a file name, not a path",
+            q.name
+        )));
+    }
+    interslice_io::Format::of_path(&rel)?;
+    if body.is_empty() {
+        return Err(ApiError::bad_request("the uploaded file is empty"));
+    }
+    let c = state.cell(&cell).await?;
+    let st = state.clone();
+    let info = blocking(move || {
+        // The readers take paths: the upload goes through a private temp folder.
+        let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
+        let path = dir.path().join(&rel);
+        std::fs::write(&path, &body).map_err(|e| ApiError::internal(e.to_string()))?;
+        let labels = interslice_io::read_labels(&path)?;
+        labels
+            .geometry()
+            .ensure_same_grid(c.volume.geometry())
+            .map_err(|e| {
+                ApiError::bad_request(format!("the segmentation is not on the cell's grid: {e}"))
+            })?;
+        let params = serde_json::json!({"file": q.name, "bytes": body.len()});
+        let meta =
+            st.store
+                .save_segmentation(&cell, &q.name, "upload", &params, &labels, Some(me.id))?;
+        Ok(SegmentationInfo {
+            id: meta.id.to_string(),
+            name: meta.name,
+            method: meta.method,
+            params: meta.params,
+            created: meta.created,
+        })
+    })
+    .await?;
+    Ok((StatusCode::CREATED, Json(info)).into_response())
 }
 
 /// Body of `POST /api/cells/{cell}/segmentations`.

@@ -99,6 +99,16 @@ impl From<tokio::task::JoinError> for ApiError {
     }
 }
 
+/// A body that could not be read: 413 over the limit, else the reason.
+pub fn body_rejection(e: BytesRejection) -> ApiError {
+    let status = e.status();
+    if status == StatusCode::PAYLOAD_TOO_LARGE {
+        ApiError::new(status, "request body is too large")
+    } else {
+        ApiError::new(status, e.body_text())
+    }
+}
+
 /// A JSON body parsed from the raw bytes, whatever the Content-Type: a body
 /// over the limit is 413, anything unparsable 400 with serde's one-line reason.
 pub struct ApiJson<T>(pub T);
@@ -107,17 +117,9 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     type Rejection = ApiError;
 
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
-        let bytes =
-            axum::body::Bytes::from_request(req, state)
-                .await
-                .map_err(|e: BytesRejection| {
-                    let status = e.status();
-                    if status == StatusCode::PAYLOAD_TOO_LARGE {
-                        ApiError::new(status, "request body is too large")
-                    } else {
-                        ApiError::new(status, e.body_text())
-                    }
-                })?;
+        let bytes = axum::body::Bytes::from_request(req, state)
+            .await
+            .map_err(body_rejection)?;
         serde_json::from_slice(&bytes)
             .map(ApiJson)
             .map_err(|e| ApiError::bad_request(format!("malformed JSON body: {e}")))

@@ -16,6 +16,8 @@
 pub mod api;
 pub mod auth;
 pub mod cells;
+pub mod client;
+pub mod consensus;
 pub mod error;
 pub mod groundtruth;
 pub mod loadtest;

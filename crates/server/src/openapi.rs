@@ -74,6 +74,7 @@ pub const ROUTES: &[Route] = &[
     r("POST", "/api/cells/{cell}/evaluate", "evaluation", "Metrics of a test against a reference", Some("EvaluateBody"), "application/json"),
     r("GET", "/api/cells/{cell}/segmentations", "evaluation", "Computed segmentations and files under segmentations/<cell>/", None, "application/json"),
     r("POST", "/api/cells/{cell}/segmentations", "evaluation", "Compute a threshold segmentation", Some("SegmentBody"), "application/json"),
+    r("POST", "/api/cells/{cell}/segmentations/upload", "evaluation", "Upload a label volume file (body; format from ?name=) as a segmentation", None, "application/json"),
     r("GET", "/api/cells/{cell}/overlay/{axis}/{index}", "evaluation", "u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN", None, "application/octet-stream"),
     r("GET", "/api/cells/{cell}/ratings", "evaluation", "Ratings of the cell's segmentations", None, "application/json"),
     r("POST", "/api/cells/{cell}/ratings", "evaluation", "Rate a segmentation 1..5", Some("RatingBody"), "application/json"),

@@ -61,6 +61,10 @@ pub enum StoreError {
     Corrupt(String),
 }
 
+/// The reserved user name that stands for the consensus of every user's
+/// tracing in exports and evaluations (no account may take it).
+pub const CONSENSUS: &str = "consensus";
+
 /// Result alias of this crate.
 pub type Result<T, E = StoreError> = std::result::Result<T, E>;
 

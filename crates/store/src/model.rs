@@ -118,6 +118,10 @@ pub struct NewContour {
     /// The drawing tool ("pen", "mouse", "polygon", ...).
     #[serde(default)]
     pub tool: Option<String>,
+    /// Time spent drawing it, measured by the client (default: the last
+    /// per-point time, if any).
+    #[serde(default)]
+    pub duration_ms: Option<f64>,
 }
 
 /// A stored contour.

@@ -113,6 +113,13 @@ pub(crate) fn validate_contour(c: &NewContour) -> Result<()> {
             return Err(StoreError::Invalid("times_ms values must be finite".into()));
         }
     }
+    if let Some(d) = c.duration_ms
+        && !(d.is_finite() && (0.0..=86_400_000.0).contains(&d))
+    {
+        return Err(StoreError::Invalid(
+            "duration_ms must be between 0 and 86400000".into(),
+        ));
+    }
     if let Some(tool) = &c.tool
         && tool.len() > 64
     {
@@ -129,6 +136,12 @@ fn validate_name(name: &str) -> Result<()> {
         return Err(StoreError::Invalid(
             "a user name has 1 to 64 characters and no surrounding spaces".into(),
         ));
+    }
+    // "consensus" names the combined tracing of all users in exports.
+    if name.eq_ignore_ascii_case(crate::CONSENSUS) {
+        return Err(StoreError::Invalid(format!(
+            "'{name}' is reserved (it names the consensus of all users)"
+        )));
     }
     if name
         .chars()
@@ -316,10 +329,13 @@ fn insert_contour_row(
 
 fn stored_from_new(key: &SliceKey, c: NewContour, client_id: Option<String>) -> StoredContour {
     let now = now_rfc3339();
-    let duration_ms = c.times_ms.as_ref().and_then(|t| {
-        t.iter()
-            .cloned()
-            .fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x))))
+    // The client's measured drawing time wins; otherwise the last per-point time.
+    let duration_ms = c.duration_ms.or_else(|| {
+        c.times_ms.as_ref().and_then(|t| {
+            t.iter()
+                .cloned()
+                .fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x))))
+        })
     });
     StoredContour {
         id: 0,

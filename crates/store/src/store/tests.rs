@@ -24,6 +24,7 @@ fn square(x: f64) -> NewContour {
         pressure: Some(vec![0.5; 4]),
         times_ms: Some(vec![0.0, 10.0, 20.0, 35.0]),
         tool: Some("pen".into()),
+        duration_ms: None,
     }
 }
 
