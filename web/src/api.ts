@@ -34,6 +34,8 @@ export interface Cell {
   unit: string;
   dtype: "u8" | "u16";
   status: "not_started" | "in_progress" | "done";
+  /** Seconds this user spent tracing it. */
+  seconds: number;
 }
 
 /** A label (component). */
@@ -96,7 +98,9 @@ export interface InterpResult {
   label: number;
   axis: Axis;
   slices: { index: number; drawn: boolean; contours: Vec2[][] }[];
+  /** Physical volume of the interpolated mask. */
   volume: number;
+  /** Its unit, already cubed ("µm³"). */
   unit: string;
 }
 

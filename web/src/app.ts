@@ -127,7 +127,7 @@ export class App {
         return;
       }
       list.replaceChildren(
-        h("thead", {}, h("tr", {}, h("th", {}, "Cell"), h("th", {}, "Size (voxels)"), h("th", {}, "Voxel"), h("th", {}, "Type"), h("th", {}, "Your status"), h("th", {}))),
+        h("thead", {}, h("tr", {}, h("th", {}, "Cell"), h("th", {}, "Size (voxels)"), h("th", {}, "Voxel"), h("th", {}, "Type"), h("th", {}, "Your status"), h("th", {}, "Time spent"), h("th", {}))),
         h("tbody", {}, ...cells.map((c) =>
           h("tr", { "data-cell": c.id, class: `st-${c.status}` },
             h("td", {}, h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, testid: `open-cell-${c.id}` }, c.name || c.id)),
@@ -135,10 +135,11 @@ export class App {
             h("td", {}, `${c.spacing.map((s) => +s.toPrecision(3)).join(" × ")} ${c.unit}`),
             h("td", {}, c.dtype),
             h("td", {}, h("span", { class: `badge ${c.status}` }, STATUS_TEXT[c.status] ?? c.status)),
+            h("td", { class: "num" }, c.seconds > 0 ? hms(c.seconds) : "—"),
             h("td", {}, h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, class: "button" }, c.status === "not_started" ? "Start" : "Open")),
           ))),
       );
-      if (cells.length === 0) list.append(h("tr", {}, h("td", { colspan: 6, class: "muted" }, showAll.checked ? "No cells." : "All your cells are finished. Tick “show finished” to see them.")));
+      if (cells.length === 0) list.append(h("tr", {}, h("td", { colspan: 7, class: "muted" }, showAll.checked ? "No cells." : "All your cells are finished. Tick “show finished” to see them.")));
     };
     showAll.addEventListener("change", () => void fill());
     this.body.replaceChildren(
@@ -211,4 +212,3 @@ export class App {
   }
 }
 
-export { hms };

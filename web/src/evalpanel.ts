@@ -203,7 +203,10 @@ export class EvalPanel {
     const unit = this.ctx.cell.unit || "";
     const lname = this.ctx.labels().find((l) => l.id === this.ctx.label())?.name ?? `label ${this.ctx.label()}`;
     const rows = ROWS.filter(([k]) => k in m).map(([k, title, kind]) => h("tr", {}, h("th", {}, title), h("td", { "data-key": k }, formatMetric(m[k], kind, unit))));
+    // An empty reference makes every overlap figure 0 or undefined: say why.
+    const noTruth = m.volume_gt === 0 ? h("p", { class: "warn", testid: "metrics-warning" }, `Your ${lname} is empty on this cell: trace it (or choose another component) before comparing.`) : null;
     this.table.replaceChildren(
+      ...(noTruth ? [noTruth] : []),
       h("table", {}, h("caption", {}, `${seg.method} vs ${this.ctx.me.name}'s ${lname}`), h("tbody", {}, ...rows)),
     );
   }

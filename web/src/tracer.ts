@@ -30,6 +30,8 @@ export interface Figures {
   strokeLatency: number[];
   /** ms from finishing a contour to the updated dashed preview painted. */
   previewLatency: number[];
+  /** ms from finishing a contour to the server's acknowledgement that it is stored. */
+  saveLatency: number[];
 }
 
 /** Persisted per-cell view settings. */
@@ -59,7 +61,11 @@ export interface TracerHost {
 /** The tracing screen. */
 export class Tracer {
   readonly root: HTMLElement;
-  readonly figures: Figures = { sliceSwitch: [], strokeLatency: [], previewLatency: [] };
+  readonly figures: Figures = { sliceSwitch: [], strokeLatency: [], previewLatency: [], saveLatency: [] };
+  /** Whether start() finished (the screen shows the cell and its tracings). */
+  ready = false;
+  /** When each unacknowledged contour was finished, by client id. */
+  private committedAt = new Map<string, number>();
   private views: Record<Axis, SliceView>;
   private st: ViewState;
   private hist: Histogram | null = null;
@@ -196,7 +202,12 @@ export class Tracer {
       type: "number",
       min: "0",
       title: "Slice index (0-based); any slice can be reached",
-      onchange: (ev: Event) => this.goto(Number((ev.target as HTMLInputElement).value)),
+      onchange: (ev: Event) => {
+        const box = ev.target as HTMLInputElement;
+        // Leave the box so the arrow keys step through slices again.
+        box.blur();
+        void this.goto(Number(box.value));
+      },
     });
     e.sliceMax = h("span", { class: "muted" });
     e.skip = h("input", {
@@ -310,7 +321,7 @@ export class Tracer {
     e.sideA = h("div", { class: "slot-a" });
     e.sideB = h("div", { class: "slot-b" });
     e.v3dHost = h("div", { class: "v3d-host" });
-    e.v3dMsg = h("div", { class: "v3d-msg" }, "3D view — click to show the interpolated surfaces (D)");
+    e.v3dMsg = h("div", { class: "v3d-msg", testid: "view-3d-status" }, "3D view — click to show the interpolated surfaces (D)");
     e.v3d = h("div", { class: "slot-3d", testid: "view-3d", title: "3D view of the interpolated surfaces (D)", onclick: () => {
       if (!this.show3d) void this.toggle3d(true);
     } }, e.v3dHost, e.v3dMsg);
@@ -359,6 +370,7 @@ export class Tracer {
     await this.refreshAll();
     if (this.hasDrawn()) void this.runPreview(false);
     this.evalPanel.start();
+    this.ready = true;
     // Time spent tracing: counted while the page is visible and the user active in the last minute.
     this.timers.push(
       window.setInterval(() => {
@@ -786,7 +798,9 @@ export class Tracer {
     const body = { label: this.st.label, axis: this.st.axis, index: this.index, points: c.points.map(([u, v]) => [round3(u), round3(v)] as Vec2), pressure: c.pressure, times_ms: c.times_ms, tool: c.tool };
     this.previewT0 = performance.now();
     this.drawn.set(this.index, false);
-    void this.host.outbox.push({ kind: "contour", cell, client_id: newClientId(), body });
+    const client_id = newClientId();
+    this.committedAt.set(client_id, performance.now());
+    void this.host.outbox.push({ kind: "contour", cell, client_id, body });
     this.recompute();
     if (this.cell.status === "not_started") void this.setDone(false);
   }
@@ -835,6 +849,11 @@ export class Tracer {
   /** Called by the app when the outbox acknowledged an operation of this cell. */
   onSent(op: import("./queue").Op, answer: unknown): void {
     if (op.cell !== this.cell.id) return;
+    const t0 = this.committedAt.get(op.client_id);
+    if (t0 !== undefined) {
+      this.figures.saveLatency.push(performance.now() - t0);
+      this.committedAt.delete(op.client_id);
+    }
     if (op.kind === "contour" && answer && typeof answer === "object" && "id" in answer) {
       const c = answer as Contour;
       if (!this.serverContours.some((x) => x.id === c.id)) this.serverContours.push(c);
@@ -920,7 +939,7 @@ export class Tracer {
       } else {
         const r = await this.host.api.interpolate(this.cell.id, label, axis, this.st.method || undefined);
         this.previews.set(`${label}/${axis}`, r);
-        this.el.volume.textContent = `${this.labelOf(label).name}: ${fmtNum(r.volume)} ${r.unit}³ (${r.method})`;
+        this.el.volume.textContent = `${this.labelOf(label).name}: ${fmtNum(r.volume)} ${r.unit} (${r.method})`;
         this.paintAll();
         if (t0 !== null) {
           await new Promise((res) => requestAnimationFrame(() => res(null)));
@@ -1016,7 +1035,7 @@ export class Tracer {
       h("span", {}, `value ${value}`),
       h("span", {}, h("i", { class: "swatch", style: { background: this.labelOf(this.st.label).color } }), ` ${this.labelOf(this.st.label).name}`),
       h("span", { testid: "status-kind", class: kind.startsWith("drawn") ? "ok" : "" }, `${kind} · ${nDrawn} drawn`),
-      h("span", { title: "time spent tracing this cell" }, `⏱ ${hms(this.seconds)}`),
+      h("span", { title: "time spent tracing this cell" }, `time ${hms(this.seconds)}`),
       h("span", { class: "grow" }),
       h("button", { class: "link", onclick: () => (this.el.help.hidden = false), title: "Keyboard shortcuts (?)" }, "? help"),
     );
@@ -1105,14 +1124,19 @@ export class Tracer {
   }
 
   /** A summary of the state (for the end-to-end test). */
-  summary(): { axis: Axis; index: number; label: number; drawn: number[]; contours: number; preview: boolean } {
+  summary(): { axis: Axis; index: number; label: number; drawn: number[]; empty: number[]; contours: number; onSlice: number; preview: boolean; overlay: boolean; pending: number } {
+    const mine = this.contours.filter((c) => c.label === this.st.label && c.axis === this.st.axis);
     return {
       axis: this.st.axis,
       index: this.index,
       label: this.st.label,
       drawn: [...this.drawn.keys()].sort((a, b) => a - b),
-      contours: this.contours.filter((c) => c.label === this.st.label && c.axis === this.st.axis).length,
+      empty: [...this.drawn].filter(([, e]) => e).map(([i]) => i).sort((a, b) => a - b),
+      contours: mine.length,
+      onSlice: mine.filter((c) => c.index === this.index).length,
       preview: this.previews.has(`${this.st.label}/${this.st.axis}`),
+      overlay: this.views[this.st.axis].scene.overlay !== null,
+      pending: this.host.outbox.pending.length,
     };
   }
 }
