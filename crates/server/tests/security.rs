@@ -1,0 +1,407 @@
+//! Sign-in, ownership and input checks over real HTTP: off loopback nothing
+//! works without a password session; users cannot read or change each other's
+//! tracings (reviewers read them); paths are never taken from clients; large
+//! bodies are 413, malformed ones 400, slices out of range 404.
+mod common;
+
+use common::*;
+use interslice_server::client::Client;
+use interslice_store::Role;
+use serde_json::json;
+use std::net::SocketAddr;
+
+const PW: &str = "correct horse battery";
+
+fn square(x: f64) -> Vec<[f64; 2]> {
+    vec![[x, x], [x + 4.0, x], [x + 4.0, x + 4.0], [x, x + 4.0]]
+}
+
+#[test]
+fn binding_off_loopback_requires_passwords() {
+    let dir = project();
+    let mut cfg = config(dir.path());
+    cfg.bind = SocketAddr::from(([0, 0, 0, 0], 0));
+    let server = serve(cfg);
+    assert!(server.state.auth_required);
+    server
+        .state
+        .store
+        .upsert_user("alice", Role::Tracer, Some(PW))
+        .unwrap();
+    // Reach it through loopback; the bind address decides, not the peer.
+    let url = format!("http://127.0.0.1:{}", server.addr.port());
+    let mut c = Client::new(&url);
+    for path in [
+        "/api/cells",
+        "/api/me",
+        "/api/cells/cell_01",
+        "/api/cells/cell_01/slices/z/0",
+        "/api/cells/cell_01/contours",
+        "/api/labels",
+    ] {
+        expect(&c.get(path).unwrap(), 401);
+    }
+    expect(
+        &c.json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 1, "axis": "z", "index": 0, "points": square(1.0)}),
+        )
+        .unwrap(),
+        401,
+    );
+    // A name alone, a wrong password, an unknown user: 401.
+    expect(&c.login("alice", None).unwrap(), 401);
+    expect(&c.login("alice", Some("wrong password")).unwrap(), 401);
+    expect(&c.login("mallory", Some(PW)).unwrap(), 401);
+    // A forged cookie: 401.
+    c.set_cookie(Some(format!("interslice_session={}", "ab".repeat(32))));
+    expect(&c.get("/api/cells").unwrap(), 401);
+    // The right password: a session cookie that works.
+    let a = c.login("alice", Some(PW)).unwrap();
+    expect(&a, 200);
+    let cookie = a.set_cookie.unwrap();
+    assert!(cookie.contains("HttpOnly") && cookie.contains("SameSite=Strict"));
+    expect(&c.get("/api/cells").unwrap(), 200);
+    assert_eq!(c.get("/api/me").unwrap().json()["auth_required"], true);
+    // Signing out ends the session.
+    let old = c.cookie().map(str::to_string);
+    expect(&c.send("POST", "/api/logout", None).unwrap(), 204);
+    c.set_cookie(old);
+    expect(&c.get("/api/cells").unwrap(), 401);
+}
+
+#[test]
+fn loopback_login_is_a_name_unless_required() {
+    let dir = project();
+    let server = serve(config(dir.path()));
+    assert!(!server.state.auth_required);
+    let c = signed_in(&server, "carol");
+    assert_eq!(c.get("/api/me").unwrap().json()["name"], "carol");
+    // Names that are paths or the reserved consensus name are refused.
+    let mut x = Client::new(&server.url());
+    for bad in ["../x", "a/b", "", "consensus"] {
+        expect(&x.login(bad, None).unwrap(), 400);
+    }
+    drop(server);
+    // --require-login: the same code path as a non-loopback bind.
+    let mut cfg = config(dir.path());
+    cfg.require_login = true;
+    let server = serve(cfg);
+    assert!(server.state.auth_required);
+    let mut c = Client::new(&server.url());
+    expect(&c.get("/api/cells").unwrap(), 401);
+    expect(&c.login("carol", None).unwrap(), 401);
+}
+
+#[test]
+fn users_only_touch_their_own_tracings() {
+    let dir = project();
+    let mut cfg = config(dir.path());
+    cfg.require_login = true;
+    let server = serve(cfg);
+    let store = &server.state.store;
+    store.upsert_user("alice", Role::Tracer, Some(PW)).unwrap();
+    store.upsert_user("bob", Role::Tracer, Some(PW)).unwrap();
+    store.upsert_user("rita", Role::Reviewer, Some(PW)).unwrap();
+    let login = |name: &str| {
+        let mut c = Client::new(&server.url());
+        expect(&c.login(name, Some(PW)).unwrap(), 200);
+        c
+    };
+    let (alice, bob, rita) = (login("alice"), login("bob"), login("rita"));
+
+    let a = alice
+        .json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 1, "axis": "z", "index": 5, "points": square(2.0)}),
+        )
+        .unwrap();
+    expect(&a, 201);
+    let id = a.json()["id"].as_i64().unwrap();
+    for z in [6, 9] {
+        expect(
+            &alice
+                .json(
+                    "POST",
+                    "/api/cells/cell_01/contours",
+                    &json!({"label": 1, "axis": "z", "index": z, "points": square(2.0)}),
+                )
+                .unwrap(),
+            201,
+        );
+    }
+    let alices = || {
+        store
+            .contours(&interslice_store::ContourQuery {
+                cell: "cell_01".into(),
+                user_id: store.user("alice").unwrap().unwrap().id,
+                ..Default::default()
+            })
+            .unwrap()
+    };
+    let before = alices();
+    assert_eq!(before.len(), 3);
+
+    // Bob cannot read Alice's tracing in any form.
+    expect(
+        &bob.get("/api/cells/cell_01/contours?user=alice").unwrap(),
+        403,
+    );
+    expect(
+        &bob.get("/api/cells/cell_01/drawn?label=1&user=alice")
+            .unwrap(),
+        403,
+    );
+    expect(
+        &bob.get("/api/cells/cell_01/export?user=alice").unwrap(),
+        403,
+    );
+    expect(
+        &bob.get("/api/cells/cell_01/export?user=consensus").unwrap(),
+        403,
+    );
+    expect(
+        &bob.json(
+            "POST",
+            "/api/cells/cell_01/evaluate",
+            &json!({"label": 1, "reference": {"user": "alice"}, "test": {"user": "bob"}}),
+        )
+        .unwrap(),
+        403,
+    );
+    // His own view of the cell is empty.
+    assert_eq!(
+        bob.get("/api/cells/cell_01/contours").unwrap().json(),
+        json!([])
+    );
+
+    // Bob cannot change it: delete is 403, his writes and undo go to his own tracing.
+    expect(
+        &bob.delete(&format!("/api/cells/cell_01/contours/{id}"))
+            .unwrap(),
+        403,
+    );
+    expect(
+        &bob.json(
+            "PUT",
+            "/api/cells/cell_01/slices/z/5/contours",
+            &json!({"label": 1, "contours": []}),
+        )
+        .unwrap(),
+        200,
+    );
+    expect(
+        &bob.json(
+            "POST",
+            "/api/cells/cell_01/slices/z/6/empty",
+            &json!({"label": 1}),
+        )
+        .unwrap(),
+        200,
+    );
+    for _ in 0..3 {
+        expect(
+            &bob.send("POST", "/api/cells/cell_01/undo", None).unwrap(),
+            200,
+        );
+    }
+    assert_eq!(alices(), before);
+
+    // The reviewer reads Alice's tracing but cannot change it.
+    let seen = rita.get("/api/cells/cell_01/contours?user=alice").unwrap();
+    expect(&seen, 200);
+    assert_eq!(seen.json().as_array().unwrap().len(), 3);
+    expect(
+        &rita.get("/api/cells/cell_01/contours?user=nobody").unwrap(),
+        404,
+    );
+    expect(
+        &rita
+            .delete(&format!("/api/cells/cell_01/contours/{id}"))
+            .unwrap(),
+        403,
+    );
+    assert_eq!(alices(), before);
+    // Alice herself can delete it.
+    expect(
+        &alice
+            .delete(&format!("/api/cells/cell_01/contours/{id}"))
+            .unwrap(),
+        204,
+    );
+    assert_eq!(alices().len(), 2);
+}
+
+#[test]
+fn paths_bodies_and_slice_indices_are_checked() {
+    let dir = project();
+    std::fs::write(dir.path().parent().unwrap().join("outside.nii"), b"x").ok();
+    let mut cfg = config(dir.path());
+    cfg.body_limit = 64 << 10;
+    let server = serve(cfg);
+    let c = signed_in(&server, "alice");
+
+    // `..` and absolute paths, wherever a client can put a name.
+    for path in [
+        "/api/cells/..%2F..%2Fetc%2Fpasswd",
+        "/api/cells/%2Fetc%2Fpasswd/slices/z/0",
+        "/api/cells/..%2Fcell_01/contours",
+        "/api/cells/.interslice/histogram",
+        "/api/cells/cell_01%2F..%2F..%2Fx/export",
+    ] {
+        expect(&c.get(path).unwrap(), 400);
+    }
+    for p in [
+        "../outside.nii",
+        "/etc/passwd",
+        "a/../../outside.nii",
+        "./cell_01.nii",
+    ] {
+        let a = c
+            .json(
+                "POST",
+                "/api/cells/cell_01/evaluate",
+                &json!({"label": 1, "reference": {"path": "cell_01.nii"}, "test": {"path": p}}),
+            )
+            .unwrap();
+        expect(&a, 400);
+        assert!(a.error().unwrap().contains("path"), "{:?}", a.error());
+    }
+    for name in ["..%2Fx.nii", "%2Ftmp%2Fx.nii", "a%2Fb.nii", "x.exe"] {
+        let a = c
+            .send(
+                "POST",
+                &format!("/api/cells/cell_01/segmentations/upload?name={name}"),
+                Some((b"data", "application/octet-stream")),
+            )
+            .unwrap();
+        expect(&a, 400);
+    }
+    for s in [
+        "..%2F..%2Fx",
+        "%2Fetc%2Fpasswd",
+        "file:..%2F..%2Fcell_01.nii",
+    ] {
+        let a = c
+            .get(&format!(
+                "/api/cells/cell_01/overlay/z/3?label=1&segmentation={s}"
+            ))
+            .unwrap();
+        assert!(a.status == 400 || a.status == 404, "{s}: {}", a.status);
+    }
+    expect(
+        &c.get("/api/cells/cell_01/export?format=..%2F..%2Fx")
+            .unwrap(),
+        400,
+    );
+
+    // A body over the limit: 413 with a JSON error; the server keeps serving.
+    let big: Vec<[f64; 2]> = (0..20_000).map(|i| [i as f64, 1.0]).collect();
+    let a = c
+        .json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 1, "axis": "z", "index": 0, "points": big}),
+        )
+        .unwrap();
+    expect(&a, 413);
+    let a = c
+        .send(
+            "POST",
+            "/api/cells/cell_01/segmentations/upload?name=x.nii",
+            Some((&vec![0u8; 100 << 10], "application/octet-stream")),
+        )
+        .unwrap();
+    expect(&a, 413);
+
+    // Malformed JSON: 400 with the reason.
+    for body in [
+        &b"{\"label\": 1, \"axis\": \"z\""[..],
+        b"not json",
+        b"{\"label\": \"one\"}",
+    ] {
+        let a = c
+            .send(
+                "POST",
+                "/api/cells/cell_01/contours",
+                Some((body, "application/json")),
+            )
+            .unwrap();
+        expect(&a, 400);
+        assert!(
+            a.error().unwrap().starts_with("malformed JSON body"),
+            "{:?}",
+            a.error()
+        );
+    }
+    // Invalid contours: 400 with what is wrong.
+    let a = c
+        .json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 1, "axis": "z", "index": 0, "points": [[1.0, 1.0], [2.0, 2.0]]}),
+        )
+        .unwrap();
+    expect(&a, 400);
+    assert!(a.error().unwrap().contains("at least 3 points"));
+    let a = c
+        .json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 99, "axis": "z", "index": 0, "points": square(1.0)}),
+        )
+        .unwrap();
+    expect(&a, 400);
+
+    // Slices out of range: 404 (z has 24 slices, y 28, x 32).
+    for path in [
+        "/api/cells/cell_01/slices/z/24",
+        "/api/cells/cell_01/slices/y/28",
+        "/api/cells/cell_01/slices/x/32",
+        "/api/cells/cell_01/slices/z/-1",
+        "/api/cells/cell_01/slices/z/99999999999999999999999",
+        "/api/cells/cell_01/overlay/z/24?label=1&segmentation=1",
+    ] {
+        expect(&c.get(path).unwrap(), 404);
+    }
+    expect(&c.get("/api/cells/cell_01/slices/z/23").unwrap(), 200);
+    expect(&c.get("/api/cells/cell_01/slices/w/0").unwrap(), 400);
+    expect(
+        &c.json(
+            "POST",
+            "/api/cells/cell_01/contours",
+            &json!({"label": 1, "axis": "z", "index": 24, "points": square(1.0)}),
+        )
+        .unwrap(),
+        404,
+    );
+    expect(
+        &c.json(
+            "PUT",
+            "/api/cells/cell_01/slices/y/28/contours",
+            &json!({"label": 1, "contours": []}),
+        )
+        .unwrap(),
+        404,
+    );
+    expect(
+        &c.json(
+            "POST",
+            "/api/cells/cell_01/slices/x/32/empty",
+            &json!({"label": 1}),
+        )
+        .unwrap(),
+        404,
+    );
+    // Unknown things: 404 with a message.
+    expect(&c.get("/api/cells/nope").unwrap(), 404);
+    expect(&c.get("/api/nope").unwrap(), 404);
+    expect(&c.delete("/api/cells/cell_01/contours/12345").unwrap(), 404);
+    // Nothing above was stored.
+    assert_eq!(
+        c.get("/api/cells/cell_01/contours").unwrap().json(),
+        json!([])
+    );
+}
