@@ -41,6 +41,14 @@ enum Command {
     User(cmd::user::Args),
     /// Write a user's interpolated label volume (or contours) of one cell.
     Export(cmd::export::Args),
+    /// Segment a volume automatically by an intensity threshold (Otsu, Rosin, k-means, multi-Otsu).
+    Segment(cmd::segment::Args),
+    /// The STAPLE consensus of several label volumes, with each rater's sensitivity and specificity.
+    Staple(cmd::staple::Args),
+    /// Inter-user variability of a project: volumes per user, pairwise Dice, STAPLE consensus, ratings.
+    Variability(cmd::variability::Args),
+    /// Simulated tracing campaigns (phantom cells traced by simulated users).
+    Campaign(cmd::campaign::Args),
 }
 
 fn main() {
@@ -58,6 +66,10 @@ fn main() {
         Command::Demo(a) => cmd::demo::run(a),
         Command::User(a) => cmd::user::run(a),
         Command::Export(a) => cmd::export::run(a),
+        Command::Segment(a) => cmd::segment::run(a),
+        Command::Staple(a) => cmd::staple::run(a),
+        Command::Variability(a) => cmd::variability::run(a),
+        Command::Campaign(a) => cmd::campaign::run(a),
     };
     if let Err(e) = result {
         // One line: the chain of causes joined by ": ".

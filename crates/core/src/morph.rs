@@ -12,7 +12,8 @@ use crate::{Axis, CoreError, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
 /// Which neighbours touch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Connectivity {
     /// Face neighbours only (6 in 3D, 4 in a slice).
     #[default]

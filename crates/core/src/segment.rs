@@ -8,8 +8,8 @@
 //! 3. thresholds by Otsu, Rosin, exact k-means or exact multi-class Otsu;
 //! 4. labels: a voxel `v` gets `#{t : v > t}` (0 = background; two classes
 //!    give a 0/1 mask, `K` classes labels `1..K-1`);
-//! 5. optionally only the largest 6-connected component of the foreground,
-//!    and holes filled (per label, nested: the filled mask of `label >= l`
+//! 5. optionally only the largest connected component of the foreground
+//!    (6- or 26-connected), and holes filled (per label, nested: the filled mask of `label >= l`
 //!    is painted `l` where it is lower, so inner structures stay inside).
 use crate::morph::{self, Connectivity};
 use crate::threshold::{self, Binning, Histogram, RosinEnd, ThresholdError};
@@ -94,8 +94,12 @@ pub struct SegmentParams {
     pub classes: usize,
     /// Gaussian σ in the volume's physical unit; 0 = no smoothing.
     pub smooth_sigma: f64,
-    /// Keep only the largest 6-connected component of the foreground.
+    /// Keep only the largest connected component of the foreground.
     pub largest_component: bool,
+    /// How foreground voxels connect for `largest_component`: face (6) or
+    /// full (26) neighbours. Holes are always filled with face-connected
+    /// background, so a hole is what a 6-connected flood from outside misses.
+    pub connectivity: Connectivity,
     /// Fill holes (background not connected to the border) in 3D.
     pub fill_holes: bool,
 }
@@ -107,6 +111,7 @@ impl Default for SegmentParams {
             classes: 2,
             smooth_sigma: 0.0,
             largest_component: false,
+            connectivity: Connectivity::Face,
             fill_holes: false,
         }
     }
@@ -272,7 +277,7 @@ pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation
         AnyVolume::F32(x) => x.map(|a| classify(a as f64)),
     };
     if p.largest_component {
-        let keep = morph::largest_component(&labels.map(|l| l > 0), Connectivity::Face);
+        let keep = morph::largest_component(&labels.map(|l| l > 0), p.connectivity);
         labels
             .data_mut()
             .par_iter_mut()

@@ -1,4 +1,5 @@
 //! One module per subcommand.
+pub mod campaign;
 pub mod contours;
 pub mod convert;
 pub mod demo;
@@ -8,6 +9,9 @@ pub mod info;
 pub mod interpolate;
 pub mod mesh;
 pub mod phantom;
+pub mod segment;
 pub mod serve;
+pub mod staple;
 pub mod study;
 pub mod user;
+pub mod variability;
