@@ -72,6 +72,10 @@ test("run a segmentation, compare it with my ground truth, see FP/FN on the slic
   assert.ok(await page.getByTestId("show-overlay").isChecked(), "the FP/FN overlay is switched on");
   await page.waitForFunction(() => window.__interslice.tracer().summary().overlay, null, { timeout: 30_000 });
   assert.ok(overlays.length >= 1 && overlays.every((s) => s === 200), `overlay answers: ${overlays.join(", ")}`);
+  // Closer on the nucleus, so the FP/FN border shows.
+  await page.getByTestId("view-z").focus();
+  await page.keyboard.press("+");
+  await page.keyboard.press("+");
   await page.getByTestId("metrics-table").scrollIntoViewIfNeeded();
   await shot(page, "evaluation");
 });

@@ -173,7 +173,13 @@ export class Api {
     const r = await this.req(method, path, body);
     if (r.status === 204) return undefined as T;
     const text = await r.text();
-    return (text ? JSON.parse(text) : undefined) as T;
+    if (!text) return undefined as T;
+    try {
+      return JSON.parse(text) as T;
+    } catch {
+      // A proxy's page or a truncated answer: say so instead of a parser message.
+      throw new ApiError(r.status, `the server's answer to ${method} ${path} is not JSON`);
+    }
   }
 
   /** POST /api/login */

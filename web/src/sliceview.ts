@@ -62,6 +62,8 @@ export interface Scene {
   overlay: Uint8Array | null;
   /** Text in the view's corner. */
   caption: string;
+  /** Its colour: the axis' colour, the one its crosshair line has in the other views. */
+  captionColor: string;
   /** Whether this is the working view. */
   working: boolean;
 }
@@ -99,7 +101,7 @@ export class SliceView {
   /** Slice index shown. */
   index = 0;
   /** The scene painted over the image. */
-  scene: Scene = { cross: null, contours: [], rects: [], stroke: null, strokePen: false, overlay: null, caption: "", working: false };
+  scene: Scene = { cross: null, contours: [], rects: [], stroke: null, strokePen: false, overlay: null, caption: "", captionColor: "#ccc", working: false };
   private panning: { x: number; y: number; id: number } | null = null;
   private drawingId: number | null = null;
   private spaceDown = false;
@@ -246,7 +248,7 @@ export class SliceView {
     if (sc.stroke && sc.stroke.length > 0) this.paintStroke(ctx, sc.stroke, sc.strokePen);
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     ctx.font = `${12 * dpr}px system-ui, sans-serif`;
-    ctx.fillStyle = sc.working ? "#ffd54a" : "#ccc";
+    ctx.fillStyle = sc.captionColor;
     ctx.fillText(sc.caption, 6 * dpr, 16 * dpr);
     this.lastPaint = performance.now();
     this.onPaint(this.lastPaint);

@@ -571,7 +571,8 @@ export class Tracer {
     v.scene.working = working;
     v.scene.cross = { u: f[du] + 0.5, v: f[dv] + 0.5, colorU: AXIS_COLOR[AXES[du]], colorV: AXIS_COLOR[AXES[dv]] };
     const idx = f[axisDim(a)];
-    v.scene.caption = `${a.toUpperCase()} = ${idx}${working ? "  (working)" : ""}`;
+    v.scene.caption = `${a.toUpperCase()} = ${idx}${working ? "  · working view" : ""}`;
+    v.scene.captionColor = AXIS_COLOR[a];
     v.scene.overlay = this.evalPanel.overlayFor(a, idx);
     if (working) {
       const cs: PaintContour[] = [];
