@@ -651,6 +651,7 @@ fn plot(path: &Path, rows: &[&LabelRow], unit: &str) -> Result<()> {
             .disable_x_mesh()
             .x_desc("cell")
             .y_desc(format!("volume ({unit}³)"))
+            .y_label_formatter(&|y| format!("{y:.0}"))
             .x_labels(rows.len().max(2) * 2 + 1)
             .x_label_formatter(&|x| {
                 let i = x.round();
