@@ -223,7 +223,7 @@ export class Tracer {
     });
     e.label = h("select", { testid: "label-select", title: "Component being traced (1-9)", onchange: (ev: Event) => this.setLabel(Number((ev.target as HTMLSelectElement).value)) });
     e.swatch = h("span", { class: "swatch" });
-    const newLabel = h("input", { type: "text", placeholder: "new component", class: "grow", "aria-label": "new component name" }) as HTMLInputElement;
+    const newLabel = h("input", { testid: "new-label-name", type: "text", placeholder: "new component", class: "grow", "aria-label": "new component name" }) as HTMLInputElement;
     e.method = h("select", { testid: "method-select", title: "Interpolation method", onchange: (ev: Event) => {
       this.st.method = (ev.target as HTMLSelectElement).value;
       this.saveState();
@@ -234,18 +234,18 @@ export class Tracer {
     e.status = h("div", { class: "statusline", testid: "status-line" });
     e.volume = h("div", { class: "muted small" });
     e.done = h("input", { type: "checkbox", id: "cell-done", checked: this.cell.status === "done", onchange: (ev: Event) => this.setDone((ev.target as HTMLInputElement).checked) });
-    const bright = h("input", { type: "range", min: "-100", max: "100", value: String(this.st.brightness), title: "Brightness", oninput: (ev: Event) => {
+    const bright = h("input", { testid: "brightness", type: "range", min: "-100", max: "100", value: String(this.st.brightness), title: "Brightness", oninput: (ev: Event) => {
       this.st.brightness = Number((ev.target as HTMLInputElement).value);
       this.applyWindow();
     } }) as HTMLInputElement;
-    const contrast = h("input", { type: "range", min: "-100", max: "100", value: String(this.st.contrast), title: "Contrast", oninput: (ev: Event) => {
+    const contrast = h("input", { testid: "contrast", type: "range", min: "-100", max: "100", value: String(this.st.contrast), title: "Contrast", oninput: (ev: Event) => {
       this.st.contrast = Number((ev.target as HTMLInputElement).value);
       this.applyWindow();
     } }) as HTMLInputElement;
     e.bright = bright;
     e.contrast = contrast;
-    e.wlo = h("input", { type: "number", title: "Window low (black)", class: "num", onchange: () => this.manualWindow() });
-    e.whi = h("input", { type: "number", title: "Window high (white)", class: "num", onchange: () => this.manualWindow() });
+    e.wlo = h("input", { testid: "window-low", type: "number", title: "Window low (black)", class: "num", onchange: () => this.manualWindow() });
+    e.whi = h("input", { testid: "window-high", type: "number", title: "Window high (white)", class: "num", onchange: () => this.manualWindow() });
 
     const btn = (testid: string | null, text: string, title: string, action: () => void, cls = "") =>
       h("button", { testid: testid ?? undefined, title, class: cls, onclick: () => action() }, text);
@@ -266,7 +266,7 @@ export class Tracer {
       h("section", {},
         h("h3", {}, "Component"),
         h("div", { class: "row" }, e.swatch, e.label),
-        h("div", { class: "row" }, newLabel, btn(null, "Add", "Add a component", () => void this.addLabel(newLabel))),
+        h("div", { class: "row" }, newLabel, btn("new-label-add", "Add", "Add a component", () => void this.addLabel(newLabel))),
       ),
       h("section", {},
         h("h3", {}, "Contours"),
@@ -293,7 +293,7 @@ export class Tracer {
         h("div", { class: "row" }, h("label", { class: "w" }, "Contrast"), contrast),
         h("div", { class: "row" }, h("label", { class: "w" }, "Window"), e.wlo, h("span", {}, "–"), e.whi),
         h("div", { class: "row" },
-          btn(null, "Auto", "Automatic window from the histogram (W)", () => this.autoWin()),
+          btn("auto-window", "Auto", "Automatic window from the histogram (W)", () => this.autoWin()),
           btn(null, "Fit", "Fit slices to the views (0)", () => AXES.forEach((a) => this.views[a].fit())),
           btn(null, "+", "Zoom in (+)", () => this.views[this.st.axis].zoom(1.25)),
           btn(null, "−", "Zoom out (−)", () => this.views[this.st.axis].zoom(0.8)),
@@ -1032,8 +1032,8 @@ export class Tracer {
     s.replaceChildren(
       h("span", {}, `axis ${a}`),
       h("span", { testid: "status-slice" }, `slice ${idx} / ${this.depth - 1}`),
-      h("span", {}, `voxel ${where}`),
-      h("span", {}, `value ${value}`),
+      h("span", { testid: "status-voxel" }, `voxel ${where}`),
+      h("span", { testid: "status-value" }, `value ${value}`),
       h("span", {}, h("i", { class: "swatch", style: { background: this.labelOf(this.st.label).color } }), ` ${this.labelOf(this.st.label).name}`),
       h("span", { testid: "status-kind", class: kind.startsWith("drawn") ? "ok" : "" }, `${kind} · ${nDrawn} drawn`),
       h("span", { title: "time spent tracing this cell" }, `time ${hms(this.seconds)}`),
