@@ -65,9 +65,11 @@ async function goto(i) {
   await page.getByTestId("status-slice").filter({ hasText: `slice ${i} /` }).waitFor();
 }
 
-/** Trace the outline (slice coordinates) with the pen, closing it on the start point. */
+/** Trace the outline (slice coordinates) with the pen, closing it on the start point; returns the samples sent. */
 async function trace(points) {
-  await penStroke(br.cdp, densify(await toClient(br.page, "z", points)));
+  const samples = densify(await toClient(br.page, "z", points));
+  await penStroke(br.cdp, samples);
+  return samples.length;
 }
 
 before(async () => {
@@ -140,7 +142,18 @@ test("trace the nucleus with the pen on every 5th slice", async () => {
       await shot(page, "drawing");
       await page.getByTestId("add-contour").click();
     } else {
-      for (const p of polys) await trace(p);
+      const sent = [];
+      for (const p of polys) sent.push(await trace(p));
+      // Every pen sample arrives (coalesced events included) with its pressure;
+      // only the final one, back on the start point, closes the polygon.
+      await idle();
+      const stored = await page.evaluate(([c, l, k]) => fetch(`/api/cells/${c}/contours?axis=z&index=${k}&label=${l}`).then((r) => r.json()), [CELL, nucleus.id, i]);
+      assert.deepEqual(stored.map((c) => c.points.length), sent.map((n) => n - 1), `slice ${i}: all pen samples stored`);
+      for (const c of stored) {
+        assert.equal(c.tool, "pen");
+        assert.equal(c.pressure.length, c.points.length);
+        assert.ok(new Set(c.pressure.map((p) => p.toFixed(2))).size > 5, "pressure varies along the stroke");
+      }
     }
     assert.equal((await summary()).onSlice, polys.length, `slice ${i}: contour sent on lift`);
     if (n === 2) {
