@@ -48,6 +48,7 @@ pub fn router() -> Router<SharedState> {
         .route("/api/cells/{cell}/undo", post(undo))
         .route("/api/cells/{cell}/redo", post(redo))
         .route("/api/cells/{cell}/interpolate", post(interpolate))
+        .route("/api/cells/{cell}/results", get(list_results))
         .route("/api/cells/{cell}/results/{result}/mesh", get(result_mesh))
         .route("/api/cells/{cell}/export", get(export))
         .route("/api/cells/{cell}/evaluate", post(evaluate))
@@ -719,25 +720,85 @@ async fn interpolate(
     Ok(Json(answer))
 }
 
+#[derive(Deserialize)]
+struct UserQuery {
+    #[serde(default)]
+    user: Option<String>,
+}
+
+/// A stored interpolation result.
+#[derive(Serialize, utoipa::ToSchema)]
+pub struct ResultInfo {
+    /// Id (for the mesh and `export?result=`).
+    pub id: i64,
+    /// Label id.
+    pub label: u16,
+    /// Axis of the drawn slices.
+    pub axis: String,
+    /// Interpolation method.
+    pub method: String,
+    /// Foreground voxels.
+    pub voxels: u64,
+    /// When computed (RFC 3339).
+    pub created: String,
+}
+
+async fn list_results(
+    State(state): State<SharedState>,
+    Auth(me): Auth,
+    ApiPath(cell): ApiPath<String>,
+    ApiQuery(q): ApiQuery<UserQuery>,
+) -> Result<Json<Vec<ResultInfo>>, ApiError> {
+    state.cell_path(&cell)?;
+    let target = reader_target(&state, &me, q.user.as_deref())?;
+    Ok(Json(
+        state
+            .store
+            .results(&cell, target.id)?
+            .into_iter()
+            .map(|r| ResultInfo {
+                id: r.id,
+                label: r.label,
+                axis: r.axis.to_string(),
+                method: r.method,
+                voxels: r.voxels,
+                created: r.created,
+            })
+            .collect(),
+    ))
+}
+
+/// A stored result of `cell` that `me` may read (their own, or anyone's for
+/// a reviewer).
+fn readable_result(
+    state: &SharedState,
+    me: &User,
+    cell: &str,
+    id: &str,
+) -> Result<(interslice_store::ResultMeta, interslice_core::Mask), ApiError> {
+    let n: i64 = id
+        .parse()
+        .map_err(|_| ApiError::not_found(format!("no result '{id}'")))?;
+    let (meta, mask) = state
+        .store
+        .result(n)?
+        .filter(|(m, _)| m.cell == cell)
+        .ok_or_else(|| ApiError::not_found(format!("no result {n} on cell '{cell}'")))?;
+    if meta.user_id != me.id && me.role != interslice_store::Role::Reviewer {
+        return Err(ApiError::forbidden("this result is another user's"));
+    }
+    Ok((meta, mask))
+}
+
 async fn result_mesh(
     State(state): State<SharedState>,
     Auth(me): Auth,
     ApiPath((cell, result)): ApiPath<(String, String)>,
 ) -> Result<Response, ApiError> {
     state.cell_path(&cell)?;
-    let id: i64 = result
-        .parse()
-        .map_err(|_| ApiError::not_found(format!("no result '{result}'")))?;
     let st = state.clone();
     let body = blocking(move || {
-        let (meta, mask) = st
-            .store
-            .result(id)?
-            .filter(|(m, _)| m.cell == cell)
-            .ok_or_else(|| ApiError::not_found(format!("no result {id} on cell '{cell}'")))?;
-        if meta.user_id != me.id && me.role != interslice_store::Role::Reviewer {
-            return Err(ApiError::forbidden("this result is another user's"));
-        }
+        let (_, mask) = readable_result(&st, &me, &cell, &result)?;
         let mesh = interslice_interp::mesh::mask_surface(&mask);
         let vertices: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
@@ -759,6 +820,9 @@ async fn result_mesh(
 struct ExportQuery {
     #[serde(default)]
     format: Option<String>,
+    /// A stored interpolation result instead of a fresh interpolation.
+    #[serde(default)]
+    result: Option<String>,
     #[serde(default)]
     user: Option<String>,
     #[serde(default)]
@@ -782,23 +846,53 @@ pub fn export_bytes(
         let text = contours_json(state, cell, geometry, user)?;
         return Ok((text.into_bytes(), format!("{base}.contours.json")));
     }
-    let ext = match format {
-        "nii.gz" | "nii" | "nrrd" | "tiff" | "tif" | "mha" => format,
-        other => {
-            return Err(ApiError::bad_request(format!(
-                "unknown export format '{other}' (nii.gz, nii, nrrd, mha, tiff or contours)"
-            )));
-        }
-    };
+    let ext = volume_extension(format)?;
     let m = method_by_name(method)?;
     let labels =
         groundtruth::label_volume(&state.store, geometry, cell, user.id, m.as_ref(), label)?;
-    let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
     let name = format!("{base}.{ext}");
-    let path = dir.path().join(&name);
-    interslice_io::write_labels(&path, &labels)?;
-    let bytes = std::fs::read(&path).map_err(|e| ApiError::internal(e.to_string()))?;
+    let bytes = label_file_bytes(&labels, &name)?;
     Ok((bytes, name))
+}
+
+/// A stored interpolation result as a label volume file (its label's value
+/// inside the mask).
+fn result_bytes(
+    state: &SharedState,
+    me: &User,
+    cell: &str,
+    id: &str,
+    format: &str,
+) -> Result<(Vec<u8>, String), ApiError> {
+    let ext = volume_extension(format)?;
+    let (meta, mask) = readable_result(state, me, cell, id)?;
+    let data = mask
+        .data()
+        .iter()
+        .map(|&b| if b { meta.label } else { 0 })
+        .collect();
+    let labels = LabelVolume::from_vec(mask.geometry().clone(), data)?;
+    let name = format!("{cell}-result-{}.{ext}", meta.id);
+    Ok((label_file_bytes(&labels, &name)?, name))
+}
+
+/// The extension of a label volume export format, or 400.
+fn volume_extension(format: &str) -> Result<&str, ApiError> {
+    match format {
+        "nii.gz" | "nii" | "nrrd" | "tiff" | "tif" | "mha" => Ok(format),
+        other => Err(ApiError::bad_request(format!(
+            "unknown export format '{other}' (nii.gz, nii, nrrd, mha, tiff or contours)"
+        ))),
+    }
+}
+
+/// The bytes of `labels` written as the file `name` (the writers take paths,
+/// so through a private temporary folder).
+fn label_file_bytes(labels: &LabelVolume, name: &str) -> Result<Vec<u8>, ApiError> {
+    let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
+    let path = dir.path().join(name);
+    interslice_io::write_labels(&path, labels)?;
+    std::fs::read(&path).map_err(|e| ApiError::internal(e.to_string()))
 }
 
 /// The user's contours of a cell in the contours file format.
@@ -867,11 +961,20 @@ async fn export(
     let format = q.format.unwrap_or_else(|| "nii.gz".to_string());
     let st = state.clone();
     let (bytes, name) = blocking(move || {
+        if let Some(id) = &q.result {
+            return result_bytes(&st, &me, &cell, id, &format);
+        }
         if consensus {
             let m = method_by_name(q.method.as_deref())?;
             let g = c.volume.geometry();
             return crate::consensus::export_bytes(
-                &st.store, &target, &cell, g, &format, m.as_ref(), q.label,
+                &st.store,
+                &target,
+                &cell,
+                g,
+                &format,
+                m.as_ref(),
+                q.label,
             );
         }
         export_bytes(
@@ -972,8 +1075,19 @@ fn resolve_source(
         ));
     }
     if let Some(u) = &src.user {
-        let target = reader_target(state, me, Some(u))?;
         let m = method_by_name(method)?;
+        if u.eq_ignore_ascii_case(interslice_store::CONSENSUS) {
+            // The STAPLE consensus of everyone's tracing (reviewers only).
+            return Ok(Arc::new(crate::consensus::consensus_for(
+                &state.store,
+                me,
+                geometry,
+                cell,
+                m.as_ref(),
+                None,
+            )?));
+        }
+        let target = reader_target(state, me, Some(u))?;
         return state
             .gt_cache
             .get(&state.store, geometry, cell, target.id, m.as_ref(), None);

@@ -115,7 +115,13 @@ impl AppState {
     /// Re-read the folder's cells and register new ones in the database.
     pub fn rescan(&self) -> anyhow::Result<()> {
         let found = cells::scan(&self.dir)?;
+        // Only new or moved cells are written: listing the cells is frequent
+        // and must not cost a write transaction per cell.
+        let known = self.cells.read().unwrap_or_else(|e| e.into_inner()).clone();
         for (id, path) in &found {
+            if known.get(id) == Some(path) {
+                continue;
+            }
             let rel = path.strip_prefix(&self.dir).unwrap_or(path);
             self.store.upsert_cell(id, &rel.to_string_lossy())?;
         }

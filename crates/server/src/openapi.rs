@@ -69,6 +69,7 @@ pub const ROUTES: &[Route] = &[
     r("POST", "/api/cells/{cell}/undo", "contours", "Undo the user's last change", None, "application/json"),
     r("POST", "/api/cells/{cell}/redo", "contours", "Redo the user's last undone change", None, "application/json"),
     r("POST", "/api/cells/{cell}/interpolate", "interpolation", "Interpolate a label; preview contours per slice", Some("InterpolateBody"), "application/json"),
+    r("GET", "/api/cells/{cell}/results", "interpolation", "The user's stored interpolation results, newest first (reviewers: ?user=)", None, "application/json"),
     r("GET", "/api/cells/{cell}/results/{result}/mesh", "interpolation", "Surface mesh of a result, physical units", None, "application/json"),
     r("GET", "/api/cells/{cell}/export", "interpolation", "Download the interpolated label volume or the contours", None, "application/octet-stream"),
     r("POST", "/api/cells/{cell}/evaluate", "evaluation", "Metrics of a test against a reference", Some("EvaluateBody"), "application/json"),
@@ -160,6 +161,7 @@ pub fn document() -> OpenApi {
         .schema_from::<crate::api::InterpolateBody>()
         .schema_from::<crate::api::InterpolateAnswer>()
         .schema_from::<crate::api::PreviewSlice>()
+        .schema_from::<crate::api::ResultInfo>()
         .schema_from::<crate::api::EvaluateBody>()
         .schema_from::<crate::api::Source>()
         .schema_from::<crate::api::SegmentBody>()

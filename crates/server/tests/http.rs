@@ -237,6 +237,25 @@ fn trace_reload_interpolate_export_evaluate() {
         mask.data().iter().filter(|&&b| b).count() as u64
     );
     assert_eq!(ans["voxels"], meta.voxels);
+    let results = alice.get("/api/cells/cell_01/results").unwrap().json();
+    assert_eq!(results.as_array().unwrap().len(), 1);
+    assert_eq!(results[0]["id"], ans["result_id"]);
+    assert_eq!(results[0]["method"], "linear");
+    let stored_export = alice
+        .get(&format!(
+            "/api/cells/cell_01/export?result={}&format=nii",
+            ans["result_id"]
+        ))
+        .unwrap();
+    expect(&stored_export, 200);
+    let stored_labels = read_export(&stored_export.body, "r.nii");
+    assert!(
+        stored_labels
+            .data()
+            .iter()
+            .zip(mask.data())
+            .all(|(&l, &m)| l == u16::from(m))
+    );
 
     // Export: the interpolated label volume, exactly the tracing on drawn slices.
     let exp = alice

@@ -171,6 +171,34 @@ fn users_only_touch_their_own_tracings() {
         .unwrap(),
         403,
     );
+    // Nor her stored interpolation results.
+    let more = alice
+        .json(
+            "POST",
+            "/api/cells/cell_01/interpolate",
+            &json!({"label": 1, "axis": "z", "method": "linear"}),
+        )
+        .unwrap();
+    expect(&more, 200);
+    let result = more.json()["result_id"].as_i64().unwrap();
+    expect(
+        &bob.get("/api/cells/cell_01/results?user=alice").unwrap(),
+        403,
+    );
+    expect(
+        &bob.get(&format!("/api/cells/cell_01/export?result={result}"))
+            .unwrap(),
+        403,
+    );
+    expect(
+        &bob.get(&format!("/api/cells/cell_01/results/{result}/mesh"))
+            .unwrap(),
+        403,
+    );
+    assert_eq!(
+        bob.get("/api/cells/cell_01/results").unwrap().json(),
+        json!([])
+    );
     // His own view of the cell is empty.
     assert_eq!(
         bob.get("/api/cells/cell_01/contours").unwrap().json(),
@@ -210,6 +238,12 @@ fn users_only_touch_their_own_tracings() {
     assert_eq!(alices(), before);
 
     // The reviewer reads Alice's tracing but cannot change it.
+    expect(
+        &rita
+            .get(&format!("/api/cells/cell_01/export?result={result}"))
+            .unwrap(),
+        200,
+    );
     let seen = rita.get("/api/cells/cell_01/contours?user=alice").unwrap();
     expect(&seen, 200);
     assert_eq!(seen.json().as_array().unwrap().len(), 3);

@@ -1272,6 +1272,29 @@ impl Store {
         })
     }
 
+    /// The stored interpolation results of a user on a cell, newest first.
+    pub fn results(&self, cell: &str, user_id: i64) -> Result<Vec<ResultMeta>> {
+        self.read(|tx| {
+            let mut st = tx.prepare_cached(
+                "SELECT id, cell, user_id, label, axis, method, voxels, created FROM results \
+                 WHERE cell = ?1 AND user_id = ?2 ORDER BY id DESC",
+            )?;
+            let rows = st.query_map(params![cell, user_id], |r| {
+                Ok(ResultMeta {
+                    id: r.get(0)?,
+                    cell: r.get(1)?,
+                    user_id: r.get(2)?,
+                    label: r.get(3)?,
+                    axis: parse_axis(&r.get::<_, String>(4)?)?,
+                    method: r.get(5)?,
+                    voxels: r.get::<_, i64>(6)? as u64,
+                    created: r.get(7)?,
+                })
+            })?;
+            Ok(rows.collect::<rusqlite::Result<_>>()?)
+        })
+    }
+
     /// A stored interpolation result and its mask.
     pub fn result(&self, id: i64) -> Result<Option<(ResultMeta, Mask)>> {
         let row = self.read(|tx| {

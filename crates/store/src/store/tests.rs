@@ -296,6 +296,8 @@ fn time_status_results_segmentations_ratings() {
     assert_eq!(back, mask);
     assert_eq!((meta.voxels, meta.label, meta.axis), (12, 2, Axis::Y));
     assert!(s.result(id + 1).unwrap().is_none());
+    assert_eq!(s.results("cell1", u.id).unwrap(), vec![meta]);
+    assert!(s.results("cell1", u.id + 1).unwrap().is_empty());
 
     let labels = Volume::from_vec(g, (0..60).map(|i| (i % 3) as u16).collect()).unwrap();
     let seg = s
