@@ -120,7 +120,6 @@ export class Tracer {
       const [w, hh] = sliceShape(a, cell.dims);
       const [du, dv] = inPlane(a);
       this.views[a].setGeometry(w, hh, cell.spacing[dv] / cell.spacing[du]);
-      void hh;
     }
     // Stroke latency: from the newest pointer event to the frame that painted it.
     this.views.x.onPaint = this.views.y.onPaint = this.views.z.onPaint = (now) => {
@@ -305,7 +304,7 @@ export class Tracer {
         h("div", { class: "row" }, e.done, h("label", { for: "cell-done" }, "finished (hide from my queue)")),
         h("div", { class: "row" },
           btn("next-cell", "Next cell ▶", "Open the next cell in the queue (N); everything is saved", () => void this.nextCell(), "primary"),
-          btn(null, "All cells", "Back to the cell list", () => host_showList(this.host)),
+          btn(null, "All cells", "Back to the cell list", () => this.host.showList()),
         ),
         h("div", { class: "row small" },
           "Export: ",
@@ -606,7 +605,6 @@ export class Tracer {
    */
   private cutRects(b: Axis): PaintRect[] {
     const A = this.st.axis;
-    const dA = axisDim(A);
     const [au, av] = inPlane(A);
     const [bu] = inPlane(b);
     const db = axisDim(b);
@@ -640,7 +638,6 @@ export class Tracer {
         else rects.push({ r: [e.index, s0, e.index + 1, s1], color });
       }
     }
-    void dA;
     return rects;
   }
 
@@ -1140,10 +1137,6 @@ export class Tracer {
       pending: this.host.outbox.pending.length,
     };
   }
-}
-
-function host_showList(h: TracerHost): void {
-  h.showList();
 }
 
 function round3(x: number): number {

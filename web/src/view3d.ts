@@ -6,6 +6,7 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import type { Mesh } from "./api";
+import { taubin } from "./smooth";
 
 /** One surface to show. */
 export interface Surface {
@@ -57,7 +58,7 @@ export class Viewer3D {
     surfaces.forEach((s, n) => {
       if (s.mesh.indices.length === 0) return;
       const g = new THREE.BufferGeometry();
-      g.setAttribute("position", new THREE.Float32BufferAttribute(s.mesh.vertices, 3));
+      g.setAttribute("position", new THREE.Float32BufferAttribute(taubin(s.mesh.vertices, s.mesh.indices), 3));
       g.setIndex(s.mesh.indices);
       g.computeVertexNormals();
       const outer = n < surfaces.length - 1;
