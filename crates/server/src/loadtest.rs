@@ -265,10 +265,15 @@ fn trace(
         // Corners on a 0.25 grid inside the slice.
         let x0 = 1.0 + ((seq * 7) % (room as u64 * 4)) as f64 * 0.25;
         let y0 = 1.0 + ((seq * 13) % (room as u64 * 4)) as f64 * 0.25;
+        // A tracer keeps a few contours per label and slice: a slice that has
+        // three gets one deleted instead of a fourth added.
+        let on_slice = r.model.get(&key).map_or(0, |m| m.len());
         let op = match seq % 10 {
+            0..=5 if on_slice >= 3 => "delete",
             0..=5 => "add",
             6 => "replace",
-            7 => "delete",
+            7 if on_slice > 0 => "delete",
+            7 => "add",
             8 => "slice",
             _ => "read",
         };
@@ -291,15 +296,13 @@ fn trace(
                 ]}),
             ),
             "delete" => {
-                let target = r
-                    .model
-                    .iter()
-                    .rev()
-                    .find_map(|(k, m)| m.keys().next_back().map(|id| (*k, *id)));
-                match target {
-                    Some((_, id)) => client.delete(&format!("{contours}/{id}")),
-                    None => continue,
-                }
+                // The slice's newest contour (the op is only chosen when there is one).
+                let id = r.model[&key]
+                    .keys()
+                    .next_back()
+                    .copied()
+                    .unwrap_or_default();
+                client.delete(&format!("{contours}/{id}"))
             }
             "slice" => client.get(&format!("/api/cells/{cell}/slices/z/{slice}")),
             _ => client.get(&format!("{contours}?axis=z&index={slice}&label={label}")),
@@ -339,8 +342,7 @@ fn trace(
                 }
             }
             "delete" => {
-                // The deleted id is the last of the slice chosen above.
-                if let Some(m) = r.model.values_mut().rev().find(|m| !m.is_empty()) {
+                if let Some(m) = r.model.get_mut(&key) {
                     m.pop_last();
                 }
                 r.acknowledged += 1;
