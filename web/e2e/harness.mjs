@@ -21,7 +21,12 @@ const CHROMIUM = process.env.CHROMIUM ?? "/usr/bin/chromium";
 
 /** Run the binary, return its stdout (throws with its stderr on failure). */
 export function cli(...args) {
-  return execFileSync(BIN, args, { encoding: "utf8", stdio: ["ignore", "pipe", "pipe"], maxBuffer: 256 << 20 });
+  return cliWith({}, ...args);
+}
+
+/** Run the binary with extra environment variables. */
+export function cliWith(env, ...args) {
+  return execFileSync(BIN, args, { encoding: "utf8", env: { ...process.env, ...env }, stdio: ["ignore", "pipe", "pipe"], maxBuffer: 256 << 20 });
 }
 
 async function freePort() {
@@ -40,28 +45,40 @@ async function freePort() {
  * once the API answers. `stop()` ends the server and removes the folder.
  */
 export async function startDemo({ size = 128 } = {}) {
-  if (!fs.existsSync(BIN)) throw new Error(`${BIN} not found: build it with cargo build --release -p interslice-cli`);
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), "interslice-e2e-"));
+  return startServer(dir, (bind) => ["demo", dir, "--bind", bind, "--size", String(size)]);
+}
+
+/**
+ * `interslice serve DIR` (with `extra` options) on a free loopback port, for a
+ * project folder the caller prepared; `stop()` removes it too.
+ */
+export async function startServe(dir, extra = []) {
+  return startServer(dir, (bind) => ["serve", dir, "--bind", bind, ...extra]);
+}
+
+async function startServer(dir, argsFor) {
+  if (!fs.existsSync(BIN)) throw new Error(`${BIN} not found: build it with cargo build --release -p interslice-cli`);
   // Files the tests write (exports, contours) stay out of the project folder, where they would be listed as cells.
   const scratch = fs.mkdtempSync(path.join(os.tmpdir(), "interslice-e2e-out-"));
   const port = await freePort();
   const url = `http://127.0.0.1:${port}`;
   const log = [];
-  const proc = spawn(BIN, ["demo", dir, "--bind", `127.0.0.1:${port}`, "--size", String(size)], { stdio: ["ignore", "pipe", "pipe"] });
+  const proc = spawn(BIN, argsFor(`127.0.0.1:${port}`), { stdio: ["ignore", "pipe", "pipe"] });
   proc.stdout.on("data", (d) => log.push(String(d)));
   proc.stderr.on("data", (d) => log.push(String(d)));
   let exited = null;
   proc.on("exit", (code) => (exited = code));
   const deadline = Date.now() + 120_000;
   for (;;) {
-    if (exited !== null) throw new Error(`interslice demo exited with ${exited}:\n${log.join("")}`);
+    if (exited !== null) throw new Error(`interslice exited with ${exited}:\n${log.join("")}`);
     try {
       const r = await fetch(`${url}/api/methods`);
       if (r.ok) break;
     } catch {
       /* not listening yet */
     }
-    if (Date.now() > deadline) throw new Error(`interslice demo did not answer in 120 s:\n${log.join("")}`);
+    if (Date.now() > deadline) throw new Error(`interslice did not answer in 120 s:\n${log.join("")}`);
     await new Promise((r) => setTimeout(r, 200));
   }
   return {

@@ -86,7 +86,8 @@ export class App {
     const authRequired = this.api.authRequired ?? !loopback;
     const name = h("input", { testid: "user-name", type: "text", placeholder: "your name", autocomplete: "username", required: true }) as HTMLInputElement;
     const pass = h("input", { testid: "user-password", type: "password", placeholder: authRequired ? "password" : "password (if your account has one)", autocomplete: "current-password" }) as HTMLInputElement;
-    const err = h("p", { class: "err" });
+    const err = h("p", { class: "err", testid: "login-error" });
+    const passLabel = h("label", { hidden: !authRequired }, "Password", pass);
     const form = h(
       "form",
       { class: "login", testid: "login-form", onsubmit: async (e: Event) => {
@@ -98,13 +99,21 @@ export class App {
           if (!location.hash.startsWith("#/cell/")) location.hash = "#/cells";
           await this.route();
         } catch (ex) {
-          err.textContent = ex instanceof ApiError && ex.status === 401 ? "wrong name or password" : (ex as Error).message;
+          if (ex instanceof ApiError && ex.status === 401 && !pass.value) {
+            // The server wants a password it had not announced: ask for it.
+            passLabel.hidden = false;
+            pass.placeholder = "password";
+            err.textContent = ex.message;
+            pass.focus();
+          } else {
+            err.textContent = ex instanceof ApiError && ex.status === 401 ? "wrong name or password" : (ex as Error).message;
+          }
         }
       } },
       h("h1", {}, "interslice"),
       h("p", { class: "muted" }, "Trace a few slices, interpolate the rest, measure."),
       h("label", {}, "Name", name),
-      h("label", { hidden: !authRequired }, "Password", pass),
+      passLabel,
       h("button", { type: "submit", class: "primary", testid: "sign-in" }, "Sign in"),
       err,
     );
