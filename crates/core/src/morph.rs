@@ -23,6 +23,14 @@ pub enum Connectivity {
 }
 
 impl Connectivity {
+    /// The 3D neighbour count: 6 or 26 (how the CLI and the API name it).
+    pub fn neighbours(self) -> u8 {
+        match self {
+            Connectivity::Face => 6,
+            Connectivity::Full => 26,
+        }
+    }
+
     /// Parse "6" / "face" or "26" / "full".
     pub fn parse(s: &str) -> Result<Connectivity, CoreError> {
         match s.trim().to_ascii_lowercase().as_str() {

@@ -26,6 +26,7 @@ pub fn router() -> Router<SharedState> {
         .route("/api/methods", get(methods))
         .route("/api/labels", get(labels).post(add_label))
         .route("/api/cells", get(list_cells))
+        .route("/api/progress", get(progress))
         .route("/api/cells/{cell}", get(cell_detail))
         .route("/api/cells/{cell}/status", put(set_status))
         .route("/api/cells/{cell}/histogram", get(histogram))
@@ -278,6 +279,16 @@ async fn list_cells(
         }
     }
     Ok(Json(out))
+}
+
+/// The campaign at a glance: each user's status, time and contour count per
+/// cell. Reviewers see every user; a tracer sees their own rows.
+async fn progress(
+    State(state): State<SharedState>,
+    Auth(me): Auth,
+) -> Result<Json<Vec<interslice_store::Progress>>, ApiError> {
+    let only = (me.role != interslice_store::Role::Reviewer).then_some(me.id);
+    Ok(Json(state.store.progress(only)?))
 }
 
 /// A cell with its intensity range and the labels.
@@ -1291,6 +1302,9 @@ pub struct SegmentBody {
     /// Keep the largest connected component.
     #[serde(default)]
     pub largest_component: Option<bool>,
+    /// Neighbours that connect for `largest_component`: 6 (default) or 26.
+    #[serde(default)]
+    pub connectivity: Option<u8>,
     /// Fill holes.
     #[serde(default)]
     pub fill_holes: Option<bool>,
@@ -1315,6 +1329,9 @@ async fn add_segmentation(
     }
     p.smooth_sigma = body.smooth.unwrap_or(0.0);
     p.largest_component = body.largest_component.unwrap_or(false);
+    if let Some(n) = body.connectivity {
+        p.connectivity = interslice_core::morph::Connectivity::parse(&n.to_string())?;
+    }
     p.fill_holes = body.fill_holes.unwrap_or(false);
     p.validate()?;
     let c = state.cell(&cell).await?;
@@ -1324,6 +1341,7 @@ async fn add_segmentation(
         let params = serde_json::json!({
             "classes": p.classes, "smooth": p.smooth_sigma,
             "largest_component": p.largest_component, "fill_holes": p.fill_holes,
+            "connectivity": p.connectivity.neighbours(),
         });
         let mut name = p.method.name().to_string();
         if p.smooth_sigma > 0.0 {

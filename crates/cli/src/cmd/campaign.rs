@@ -354,6 +354,7 @@ fn rate_otsu(
     let params = serde_json::json!({
         "classes": p.classes, "smooth": p.smooth_sigma,
         "largest_component": p.largest_component, "fill_holes": p.fill_holes,
+        "connectivity": p.connectivity.neighbours(),
     });
     let meta = store.save_segmentation(cell, "otsu", "otsu", &params, &labels, None)?;
     let c =

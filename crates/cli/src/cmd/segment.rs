@@ -109,6 +109,7 @@ pub fn run(a: Args) -> Result<()> {
             },
             "smooth": p.smooth_sigma,
             "largest_component": p.largest_component,
+            "connectivity": p.connectivity.neighbours(),
             "fill_holes": p.fill_holes,
             "unit": format!("{unit}^3"),
             "labels": classes,
