@@ -55,6 +55,7 @@ pub const ROUTES: &[Route] = &[
     r("GET", "/api/labels", "labels", "The project's labels", None, "application/json"),
     r("POST", "/api/labels", "labels", "Add a label", Some("NewLabel"), "application/json"),
     r("GET", "/api/cells", "cells", "Cells with the user's status (queue=true hides finished ones)", None, "application/json"),
+    r("GET", "/api/progress", "cells", "Each user's status, seconds and contour count per cell (reviewers: everyone; tracers: their own)", None, "application/json"),
     r("GET", "/api/cells/{cell}", "cells", "A cell's metadata, range and labels", None, "application/json"),
     r("PUT", "/api/cells/{cell}/status", "cells", "Set the user's status of a cell", None, "application/json"),
     r("GET", "/api/cells/{cell}/histogram", "cells", "256-bin intensity histogram", None, "application/json"),

@@ -285,3 +285,18 @@ pub struct AuditEntry {
     /// Details as JSON.
     pub detail: serde_json::Value,
 }
+
+/// Progress of one user on one cell in a tracing campaign.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Progress {
+    /// Cell id.
+    pub cell: String,
+    /// User name.
+    pub user: String,
+    /// The user's status of the cell.
+    pub status: CellStatus,
+    /// Seconds the user spent tracing it.
+    pub seconds: f64,
+    /// Contours the user has on it.
+    pub contours: u64,
+}

@@ -774,6 +774,37 @@ impl Store {
         })
     }
 
+    /// Every user's progress on every cell they touched (a status, time or a
+    /// contour), by cell then user; only `user_id`'s rows when given.
+    pub fn progress(&self, user_id: Option<i64>) -> Result<Vec<Progress>> {
+        self.read(|tx| {
+            let mut st = tx.prepare_cached(
+                "SELECT c.id, u.name, cs.status, COALESCE(ts.seconds, 0), \
+                 (SELECT COUNT(*) FROM contours k WHERE k.cell = c.id AND k.user_id = u.id) AS n \
+                 FROM cells c CROSS JOIN users u \
+                 LEFT JOIN cell_status cs ON cs.cell = c.id AND cs.user_id = u.id \
+                 LEFT JOIN time_spent ts ON ts.cell = c.id AND ts.user_id = u.id \
+                 WHERE (?1 IS NULL OR u.id = ?1) \
+                 AND (cs.status IS NOT NULL OR ts.seconds IS NOT NULL OR n > 0) \
+                 ORDER BY c.id, u.name",
+            )?;
+            let rows = st.query_map([user_id], |r| {
+                Ok(Progress {
+                    cell: r.get(0)?,
+                    user: r.get(1)?,
+                    status: r
+                        .get::<_, Option<String>>(2)?
+                        .as_deref()
+                        .and_then(CellStatus::parse)
+                        .unwrap_or(CellStatus::NotStarted),
+                    seconds: r.get(3)?,
+                    contours: r.get::<_, i64>(4)? as u64,
+                })
+            })?;
+            Ok(rows.collect::<rusqlite::Result<_>>()?)
+        })
+    }
+
     /// Set a cell's status for the user.
     pub fn set_status(&self, cell: &str, user_id: i64, status: CellStatus) -> Result<()> {
         self.write(|tx| {

@@ -338,3 +338,33 @@ fn cell_content_hash_change_is_reported() {
         Some("h2")
     );
 }
+
+#[test]
+fn progress_lists_who_did_what() {
+    let (s, alice) = store_with_cell();
+    s.upsert_cell("cell2", "cell2.nii").unwrap();
+    let bob = s.ensure_user("bob").unwrap();
+    s.add_contour(&key(&alice, 1, 3), square(1.0), None)
+        .unwrap();
+    s.add_contour(&key(&alice, 1, 4), square(1.0), None)
+        .unwrap();
+    s.set_status("cell1", alice.id, CellStatus::Done).unwrap();
+    s.add_time("cell2", bob.id, 30.0).unwrap();
+    let all = s.progress(None).unwrap();
+    assert_eq!(
+        all.iter()
+            .map(|p| (
+                p.cell.as_str(),
+                p.user.as_str(),
+                p.status,
+                p.seconds,
+                p.contours
+            ))
+            .collect::<Vec<_>>(),
+        [
+            ("cell1", "alice", CellStatus::Done, 0.0, 2),
+            ("cell2", "bob", CellStatus::NotStarted, 30.0, 0),
+        ]
+    );
+    assert_eq!(s.progress(Some(bob.id)).unwrap().len(), 1);
+}
