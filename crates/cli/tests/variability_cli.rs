@@ -177,6 +177,41 @@ fn simulated_campaign_report() {
     .unwrap_err();
     assert_eq!(e.status.as_u16(), 403);
 
+    // Through the HTTP API: the nucleus of tracer-a evaluated against the
+    // consensus (whole structures on both sides) has the report's Dice, and
+    // the overlay of a segmentation against the consensus is served.
+    drop(store);
+    let mut config = interslice_server::Config::new(&dir);
+    config.bind = "127.0.0.1:0".parse().unwrap();
+    let server = interslice_server::spawn(config).unwrap();
+    let mut rev = interslice_server::client::Client::new(&server.url());
+    assert_eq!(rev.login("rev", None).unwrap().status, 200);
+    let ev = rev
+        .json(
+            "POST",
+            "/api/cells/cell_001/evaluate",
+            &serde_json::json!({"label": 2, "reference": {"user": "consensus"},
+                                "test": {"user": "tracer-a"}}),
+        )
+        .unwrap();
+    assert_eq!(ev.status, 200, "{:?}", ev.error());
+    let want = vols
+        .iter()
+        .find(|r| r["cell"] == "cell_001" && r["label"] == "2" && r["user"] == "tracer-a")
+        .unwrap();
+    let got = ev.json()["dice"].as_f64().unwrap();
+    assert!(
+        (got - num(want, "dice_vs_consensus")).abs() < 1e-6,
+        "{got} vs {want:?}"
+    );
+    let ov = rev
+        .get("/api/cells/cell_001/overlay/z/32?label=1&segmentation=1&reference_user=consensus")
+        .unwrap();
+    assert_eq!(ov.status, 200, "{:?}", ov.error());
+    assert_eq!(ov.body.len(), 64 * 64);
+    assert!(ov.body.iter().any(|&c| c == 1), "the cell is on slice 32");
+    drop(server);
+
     // --label narrows the report to one structure.
     let o = bin()
         .arg("variability")

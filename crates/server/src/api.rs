@@ -1086,6 +1086,9 @@ fn resolve_source(
         ));
     }
     if let Some(u) = &src.user {
+        // A tracing is measured as the whole structure of `label` (the cell
+        // with its nucleus inside, the nucleus with its nucleoli), not the
+        // painted remainder: a threshold's foreground covers the whole cell.
         let m = method_by_name(method)?;
         if u.eq_ignore_ascii_case(interslice_store::CONSENSUS) {
             // The STAPLE consensus of everyone's tracing (reviewers only).
@@ -1095,13 +1098,18 @@ fn resolve_source(
                 geometry,
                 cell,
                 m.as_ref(),
-                None,
+                Some(label),
             )?));
         }
         let target = reader_target(state, me, Some(u))?;
-        return state
-            .gt_cache
-            .get(&state.store, geometry, cell, target.id, m.as_ref(), None);
+        return state.gt_cache.get(
+            &state.store,
+            geometry,
+            cell,
+            target.id,
+            m.as_ref(),
+            Some(label),
+        );
     }
     let v = if let Some(p) = &src.path {
         let rel = safe_relative_path(p)?;
