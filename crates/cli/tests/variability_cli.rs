@@ -209,7 +209,7 @@ fn simulated_campaign_report() {
         .unwrap();
     assert_eq!(ov.status, 200, "{:?}", ov.error());
     assert_eq!(ov.body.len(), 64 * 64);
-    assert!(ov.body.iter().any(|&c| c == 1), "the cell is on slice 32");
+    assert!(ov.body.contains(&1), "the cell is on slice 32");
     drop(server);
 
     // --label narrows the report to one structure.
