@@ -368,3 +368,45 @@ fn progress_lists_who_did_what() {
     );
     assert_eq!(s.progress(Some(bob.id)).unwrap().len(), 1);
 }
+
+#[test]
+fn foreign_keys_hold_and_checkpoints_run_in_the_background() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("db.sqlite");
+    let s = Store::open(&path).unwrap();
+    s.upsert_cell("cell1", "cell1.nii").unwrap();
+    let u = s.ensure_user("alice").unwrap();
+    {
+        let conn = s.lock();
+        let fk: i64 = conn
+            .query_row("PRAGMA foreign_keys", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(fk, 1);
+        let orphan = conn.execute(
+            "INSERT INTO contours (cell, user_id, label, axis, slice, points, tool, created, updated) \
+             VALUES ('no such cell', ?1, 1, 'z', 0, '[]', 'pen', '', '')",
+            [u.id],
+        );
+        assert!(orphan.is_err());
+    }
+    let size = || std::fs::metadata(&path).unwrap().len();
+    let before = size();
+    for k in 0..200 {
+        s.add_contour(&key(&u, 1, k), square(1.0), None).unwrap();
+    }
+    // Commits only append to the WAL; the checkpoint thread copies them into
+    // the database file within a period or two.
+    let deadline = std::time::Instant::now() + Duration::from_secs(10);
+    while size() == before && std::time::Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(size() > before, "no checkpoint within 10 s");
+    drop(s);
+    assert!(
+        !dir.path().join("db.sqlite-wal").exists()
+            || std::fs::metadata(dir.path().join("db.sqlite-wal"))
+                .unwrap()
+                .len()
+                == 0
+    );
+}
