@@ -425,6 +425,18 @@ fn openapi_document_lists_every_route() {
     let doc = c.get("/api/openapi.json").unwrap().json();
     assert!(doc["openapi"].as_str().unwrap().starts_with("3."));
     let paths = doc["paths"].as_object().unwrap();
+    // Every schema a route refers to is in the components.
+    let text = doc.to_string();
+    let schemas = doc["components"]["schemas"].as_object().unwrap();
+    let refs: Vec<&str> = text
+        .split("\"$ref\":\"#/components/schemas/")
+        .skip(1)
+        .map(|part| part.split('"').next().unwrap())
+        .collect();
+    assert!(refs.len() >= 10, "{refs:?}");
+    for name in refs {
+        assert!(schemas.contains_key(name), "missing schema {name}");
+    }
 
     // The routes as the router declares them in the source.
     let src = include_str!("../src/api.rs");
