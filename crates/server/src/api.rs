@@ -1117,6 +1117,16 @@ fn resolve_source(
         if !full.exists() {
             return Err(ApiError::not_found(format!("no file '{p}' in the project")));
         }
+        // A symbolic link inside the project must not lead out of it.
+        let inside = match (full.canonicalize(), state.dir.canonicalize()) {
+            (Ok(f), Ok(d)) => f.starts_with(d),
+            _ => false,
+        };
+        if !inside {
+            return Err(ApiError::bad_request(format!(
+                "path '{p}' leads outside the project folder"
+            )));
+        }
         interslice_io::read_labels(&full)?
     } else {
         load_segmentation(state, cell, src.segmentation.as_deref().unwrap_or_default())?

@@ -317,6 +317,23 @@ fn paths_bodies_and_slice_indices_are_checked() {
         expect(&a, 400);
         assert!(a.error().unwrap().contains("path"), "{:?}", a.error());
     }
+    // A symbolic link in the project that points outside it.
+    #[cfg(unix)]
+    {
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::copy(dir.path().join("cell_01.nii"), outside.path().join("x.nii")).unwrap();
+        std::os::unix::fs::symlink(outside.path().join("x.nii"), dir.path().join("link.nii"))
+            .unwrap();
+        let a = c
+            .json(
+                "POST",
+                "/api/cells/cell_01/evaluate",
+                &json!({"label": 1, "reference": {"path": "cell_01.nii"}, "test": {"path": "link.nii"}}),
+            )
+            .unwrap();
+        expect(&a, 400);
+        assert!(a.error().unwrap().contains("outside"), "{:?}", a.error());
+    }
     for name in ["..%2Fx.nii", "%2Ftmp%2Fx.nii", "a%2Fb.nii", "x.exe"] {
         let a = c
             .send(
