@@ -211,7 +211,14 @@ struct CellsQuery {
     queue: Option<bool>,
 }
 
-async fn summary(state: &SharedState, id: &str, user: &User) -> Result<CellSummary, ApiError> {
+/// The list entry of a cell; `statuses` are the user's (one query for a
+/// whole list, not one per cell).
+async fn summary(
+    state: &SharedState,
+    id: &str,
+    user: &User,
+    statuses: &std::collections::HashMap<String, CellStatus>,
+) -> Result<CellSummary, ApiError> {
     let path = state.cell_path(id)?;
     let name = path
         .file_name()
@@ -229,12 +236,7 @@ async fn summary(state: &SharedState, id: &str, user: &User) -> Result<CellSumma
             (c.volume.geometry().clone(), c.dtype().to_string())
         }
     };
-    let status = state
-        .store
-        .statuses(user.id)?
-        .get(id)
-        .copied()
-        .unwrap_or(CellStatus::NotStarted);
+    let status = statuses.get(id).copied().unwrap_or(CellStatus::NotStarted);
     Ok(CellSummary {
         id: id.to_string(),
         name,
@@ -265,9 +267,10 @@ async fn list_cells(
         .keys()
         .cloned()
         .collect();
+    let statuses = state.store.statuses(user.id)?;
     let mut out = Vec::new();
     for id in ids {
-        match summary(&state, &id, &user).await {
+        match summary(&state, &id, &user, &statuses).await {
             Ok(s) => {
                 if q.queue == Some(true) && s.status == "done" {
                     continue;
@@ -314,7 +317,8 @@ async fn cell_detail(
     ApiPath(cell): ApiPath<String>,
 ) -> Result<Json<CellDetail>, ApiError> {
     let c = state.cell(&cell).await?;
-    let summary = summary(&state, &cell, &user).await?;
+    let statuses = state.store.statuses(user.id)?;
+    let summary = summary(&state, &cell, &user, &statuses).await?;
     Ok(Json(CellDetail {
         summary,
         min: c.min,
