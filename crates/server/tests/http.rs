@@ -511,3 +511,44 @@ fn concurrent_clients_lose_and_cross_nothing() {
     assert!(report.acknowledged_writes > 100, "{report}");
     assert_eq!(report.ops.len(), 5);
 }
+
+/// A folder of slice images is one cell; 16-bit slices come as little-endian
+/// u16, along every axis.
+#[test]
+fn slice_folder_cell_with_16_bit_little_endian_slices() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = interslice_core::Geometry::new(
+        [5, 4, 3],
+        [0.5, 0.5, 1.0],
+        interslice_core::LengthUnit::Micrometre,
+    )
+    .unwrap();
+    let data: Vec<u16> = (0..60).map(|n| 1000 * n as u16 + 7).collect();
+    let v = interslice_core::Volume::from_vec(g, data).unwrap();
+    interslice_io::write_volume(
+        &dir.path().join("stack"),
+        &interslice_core::AnyVolume::U16(v.clone()),
+    )
+    .unwrap();
+    let server = serve(config(dir.path()));
+    let c = signed_in(&server, "alice");
+    let cells = c.get("/api/cells").unwrap().json();
+    assert_eq!(cells[0]["id"], "stack");
+    assert_eq!(cells[0]["dtype"], "u16");
+    assert_eq!(cells[0]["dims"], json!([5, 4, 3]));
+    for (axis, index, w, h) in [("z", 2, 5, 4), ("y", 3, 5, 3), ("x", 4, 4, 3)] {
+        let a = c
+            .get(&format!("/api/cells/stack/slices/{axis}/{index}"))
+            .unwrap();
+        expect(&a, 200);
+        assert_eq!(a.slice_header, Some((w, h, "u16".to_string())));
+        let want: Vec<u8> = v
+            .slice(Axis::parse(axis).unwrap(), index)
+            .unwrap()
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        assert_eq!(a.body, want, "{axis}={index}");
+    }
+    expect(&c.get("/api/cells/stack/slices/z/3").unwrap(), 404);
+}
