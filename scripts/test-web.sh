@@ -1,7 +1,13 @@
 #!/usr/bin/env bash
 # The web UI's tests: exact npm dependencies, unit tests (vitest), typecheck and
-# build, then the release binary (which embeds the fresh web/dist) and the
+# build, then the `interslice` binary (which embeds the fresh web/dist) and the
 # end-to-end suites in headless Chromium against the real `interslice demo`.
+#
+# The binary is the test profile's (target/debug, optimised dependencies) that
+# `cargo test` has already built, so the suite does not compile everything a
+# second time; PROFILE=release tests the release binary instead (as the
+# figures in docs/web-ui.md were measured). scripts/test.sh builds web/dist
+# before compiling and sets WEB_BUILT=1 so it is not rebuilt here.
 #
 #   SCREENSHOTS=docs/screenshots bash scripts/test-web.sh   # also refresh the screenshots
 #   E2E_FIGURES=figures.json ...                            # keep the measured figures
@@ -14,15 +20,20 @@ if ! command -v npm >/dev/null; then
   exit 1
 fi
 
-echo "-- npm ci"
-(cd web && npm ci --no-audit --no-fund --loglevel=error)
+if [ "${WEB_BUILT:-}" != 1 ]; then
+  echo "-- npm ci, typecheck and build"
+  scripts/build-web.sh
+fi
 echo "-- vitest"
 (cd web && npx vitest run)
-echo "-- typecheck and build"
-(cd web && npm run build --silent)
 
-echo "-- release binary (embeds web/dist)"
-cargo build --release -p interslice-cli
+profile="${PROFILE:-debug}"
+echo "-- $profile binary (embeds web/dist)"
+if [ "$profile" = release ]; then
+  cargo build --release -p interslice-cli
+else
+  cargo build -p interslice-cli
+fi
 
 if [ ! -x /usr/bin/chromium ]; then
   echo "-- installing chromium"
@@ -34,5 +45,5 @@ fi
 echo "-- end-to-end (headless Chromium, real server)"
 [ -n "${SCREENSHOTS:-}" ] && export SCREENSHOTS="$(realpath -m "$SCREENSHOTS")"
 [ -n "${E2E_FIGURES:-}" ] && export E2E_FIGURES="$(realpath -m "$E2E_FIGURES")"
-export INTERSLICE_BIN="$root/target/release/interslice"
+export INTERSLICE_BIN="${CARGO_TARGET_DIR:-$root/target}/$profile/interslice"
 (cd web && npm run e2e --silent)

@@ -10,6 +10,7 @@ echo "== cargo fmt --check"
 cargo fmt --all --check
 echo "== web UI build"
 scripts/build-web.sh
+export WEB_BUILT=1
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"

@@ -15,7 +15,7 @@ let br;
 before(async () => {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), "interslice-e2e-accounts-"));
   cli("demo", dir, "--size", "48", "--count", "1", "--no-serve");
-  cliWith({ INTERSLICE_PASSWORD: "correct horse" }, "user", "add", dir, "dave");
+  cliWith({ INTERSLICE_PASSWORD: "correct horse" }, "user", "add", "dave", "--dir", dir);
   server = await startServe(dir, ["--require-login"]);
   br = await startBrowser();
 });

@@ -195,9 +195,8 @@ fn sigkill_loses_no_acknowledged_write_and_invents_none() {
 fn off_loopback_serve_needs_accounts_made_by_user_add() {
     let dir = project();
     let add = Command::new(BIN)
-        .args(["user", "add"])
+        .args(["user", "add", "alice", "--dir"])
         .arg(dir.path())
-        .args(["alice"])
         .env("INTERSLICE_PASSWORD", "a long password")
         .output()
         .unwrap();
@@ -207,16 +206,15 @@ fn off_loopback_serve_needs_accounts_made_by_user_add() {
         String::from_utf8_lossy(&add.stderr)
     );
     let short = Command::new(BIN)
-        .args(["user", "add"])
+        .args(["user", "add", "bob", "--dir"])
         .arg(dir.path())
-        .args(["bob"])
         .env("INTERSLICE_PASSWORD", "short")
         .output()
         .unwrap();
     assert_eq!(short.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&short.stderr).starts_with("error: "));
     let list = Command::new(BIN)
-        .args(["user", "list"])
+        .args(["user", "list", "--dir"])
         .arg(dir.path())
         .output()
         .unwrap();

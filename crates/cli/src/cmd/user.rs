@@ -1,5 +1,6 @@
-//! `interslice user add NAME [--reviewer] [--password-stdin]` and
-//! `interslice user list`: accounts of a project's annotation database.
+//! `interslice user add NAME [--dir DIR] [--reviewer]` and
+//! `interslice user list [--dir DIR]`: accounts of a project's annotation
+//! database (DIR defaults to the current folder, the project being served).
 //!
 //! The password is read from the `INTERSLICE_PASSWORD` environment variable or
 //! from the first line of standard input, never from the command line (which
@@ -20,10 +21,11 @@ pub struct Args {
 enum Action {
     /// Create an account, or change its password and role.
     Add {
-        /// The project folder.
-        dir: PathBuf,
         /// The user name.
         name: String,
+        /// The project folder.
+        #[arg(long, default_value = ".")]
+        dir: PathBuf,
         /// The user reads everyone's tracings (reviewer role).
         #[arg(long)]
         reviewer: bool,
@@ -34,6 +36,7 @@ enum Action {
     /// List the accounts.
     List {
         /// The project folder.
+        #[arg(long, default_value = ".")]
         dir: PathBuf,
         /// The annotation database (default DIR/.interslice/annotations.sqlite).
         #[arg(long)]
