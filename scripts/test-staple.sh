@@ -7,14 +7,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-target="${CARGO_TARGET_DIR:-target}"
-venv="$target/pyenv"
 need="SimpleITK numpy"
-if ! "$venv/bin/python" -c "import SimpleITK, numpy" 2>/dev/null; then
-  echo "setting up $venv ($need)"
-  python3 -m venv "$venv"
-  "$venv/bin/python" -m pip install -q --disable-pip-version-check $need
-fi
-
-cargo build -q -p interslice-cli
-"$venv/bin/python" scripts/staple_sitk.py --bin "$target/debug/interslice"
+. scripts/pyenv.sh
+"$venv/bin/python" scripts/staple_sitk.py --bin "$bin"
