@@ -96,11 +96,12 @@ test("rate the segmentation 1-5 with a comment", async () => {
 
 test("a comparison without ground truth, or that the server fails, is explained", async () => {
   const { page, context } = br;
-  // Nothing traced for the cell component: the metrics say so.
+  // Nothing traced for the cell component: the server's reason is shown.
   await page.getByTestId("label-select").selectOption("1");
   await page.getByTestId("evaluate").click();
-  await page.getByTestId("metrics-warning").waitFor();
-  assert.match(await page.getByTestId("metrics-warning").textContent(), /empty/);
+  const none = page.getByTestId("metrics-table").locator(".err", { hasText: "nothing traced" });
+  await none.waitFor();
+  assert.match(await none.textContent(), /^evaluation: nothing traced on cell '[^']+' by this user for label 1$/);
   // A failing server: its one-line message is shown, the screen stays usable.
   const fail = (route) => route.fulfill({ status: 500, contentType: "application/json", body: JSON.stringify({ error: "the database is locked" }) });
   await context.route("**/evaluate", fail);
