@@ -121,6 +121,20 @@ pub fn mask_polygons(mask: &[bool], width: usize, height: usize) -> Vec<Vec<[f64
     polygons
 }
 
+/// Shoelace area of a closed polygon: positive for the counter-clockwise
+/// (u right, v up) outer boundaries of [`mask_polygons`], negative for its
+/// holes, so `signed_area(p) > 0.0` picks the outer boundaries.
+pub fn signed_area(p: &[[f64; 2]]) -> f64 {
+    let n = p.len();
+    (0..n)
+        .map(|a| {
+            let (q, r) = (p[a], p[(a + 1) % n]);
+            q[0] * r[1] - r[0] * q[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,18 +222,6 @@ mod tests {
         let p = mask_polygons(&m, w, h);
         assert_eq!(p.len(), 4);
         assert_eq!(rasterise(&p, w, h), m);
-    }
-
-    fn signed_area(p: &[[f64; 2]]) -> f64 {
-        let n = p.len();
-        (0..n)
-            .map(|i| {
-                let a = p[i];
-                let b = p[(i + 1) % n];
-                a[0] * b[1] - b[0] * a[1]
-            })
-            .sum::<f64>()
-            / 2.0
     }
 
     proptest! {

@@ -18,7 +18,7 @@ use anyhow::{Context, Result, bail};
 use interslice_core::morph::Connectivity;
 use interslice_core::phantom::cell_seed;
 use interslice_core::segment::{SegmentMethod, SegmentParams, segment};
-use interslice_core::trace::mask_polygons;
+use interslice_core::trace::{mask_polygons, signed_area};
 use interslice_core::{Axis, LabelVolume};
 use interslice_store::{NewContour, SliceKey, Store};
 use rand::SeedableRng;
@@ -250,19 +250,6 @@ fn trace_cell(
         }
     }
     Ok(count)
-}
-
-/// Shoelace area, positive for the counter-clockwise outer boundaries of
-/// `mask_polygons` (u right, v up), negative for holes.
-fn signed_area(p: &[[f64; 2]]) -> f64 {
-    let n = p.len();
-    (0..n)
-        .map(|a| {
-            let (q, r) = (p[a], p[(a + 1) % n]);
-            q[0] * r[1] - r[0] * q[1]
-        })
-        .sum::<f64>()
-        / 2.0
 }
 
 /// The outline resampled every [`POINT_STEP`] pixels, each point moved along

@@ -10,7 +10,7 @@
 use anyhow::{Context, bail};
 use interslice_core::contour_file::{self, ContourFile, LabelInfo};
 use interslice_core::raster::contours_to_labels;
-use interslice_core::trace::mask_polygons;
+use interslice_core::trace::{mask_polygons, signed_area};
 use interslice_core::{Axis, Contour, SliceRef};
 use std::collections::BTreeSet;
 use std::io::Write as _;
@@ -179,19 +179,6 @@ fn extract(input: &Path, out: &Path, axis: Axis, every: usize, author: &str) -> 
         out.display()
     );
     Ok(())
-}
-
-/// Shoelace area, positive for the counter-clockwise (u right, v up) outer
-/// boundaries of `mask_polygons`, negative for holes.
-fn signed_area(p: &[[f64; 2]]) -> f64 {
-    let n = p.len();
-    (0..n)
-        .map(|a| {
-            let (q, r) = (p[a], p[(a + 1) % n]);
-            q[0] * r[1] - r[0] * q[1]
-        })
-        .sum::<f64>()
-        / 2.0
 }
 
 #[cfg(test)]
