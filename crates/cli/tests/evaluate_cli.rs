@@ -1,16 +1,9 @@
 //! `interslice evaluate` as a user runs it: the binary on reference cases, its
 //! JSON keys and values, the table, and one-line errors on bad input.
+mod common;
+use common::{assert_one_line_error, bin, refs, stdout_json};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_interslice"))
-}
-
-fn refs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/refs")
-}
+use std::path::PathBuf;
 
 fn case(name: &str, which: &str) -> PathBuf {
     refs().join(format!("cases/{name}_{which}.nii.gz"))
@@ -20,27 +13,6 @@ fn expected(name: &str) -> Value {
     let text = std::fs::read_to_string(refs().join("metrics_expected.json")).unwrap();
     let json: Value = serde_json::from_str(&text).unwrap();
     json["cases"][name]["results"].clone()
-}
-
-fn stdout_json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "exit {:?}: {}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is JSON")
-}
-
-/// A failed run: non-zero exit, no panic, one line on stderr starting `error:`.
-fn assert_one_line_error(out: &Output, needle: &str) {
-    assert!(!out.status.success());
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
-    assert!(err.starts_with("error: "), "stderr: {err}");
-    assert!(err.contains(needle), "stderr lacks {needle:?}: {err}");
-    assert!(!err.contains("panicked"), "stderr: {err}");
 }
 
 fn close(got: &Value, want: &Value, rel: f64) -> bool {

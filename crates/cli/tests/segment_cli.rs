@@ -2,42 +2,17 @@
 //! thresholds and class sizes of the reference volumes, the clean-up options
 //! (largest component with 6 or 26 neighbours, hole filling), STAPLE's
 //! estimates on synthetic raters, and one-line errors on bad input.
+mod common;
+use common::{assert_one_line_error, bin, refs, stdout_json};
 use interslice_core::{AnyVolume, Geometry, LabelVolume, LengthUnit, Volume};
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_interslice"))
-}
-
-fn refs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/refs")
-}
 
 fn reference(volume: &str, key: &str) -> Value {
     let text = std::fs::read_to_string(refs().join("thresholds_expected.json")).unwrap();
     let json: Value = serde_json::from_str(&text).unwrap();
     json["volumes"][volume]["methods"][key].clone()
-}
-
-fn stdout_json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "exit {:?}: {}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is JSON")
-}
-
-fn assert_one_line_error(out: &Output, needle: &str) {
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
-    assert!(err.starts_with("error: "), "stderr: {err}");
-    assert!(err.contains(needle), "stderr lacks {needle:?}: {err}");
 }
 
 fn segment(input: &Path, out: &Path, args: &[&str]) -> Value {
