@@ -178,6 +178,7 @@ pub fn app(state: SharedState, config: &Config) -> Router {
     use tower_http::timeout::TimeoutLayer;
     api::router()
         .merge(web::router())
+        .layer(axum::middleware::from_fn(close_after_refused_body))
         .layer(axum::extract::DefaultBodyLimit::max(config.body_limit))
         .layer(TimeoutLayer::with_status_code(
             axum::http::StatusCode::REQUEST_TIMEOUT,
@@ -192,6 +193,29 @@ pub fn app(state: SharedState, config: &Config) -> Router {
             },
         ))
         .with_state(state)
+}
+
+/// An error answered to a request that carried a body may leave that body
+/// unread (a 401 from the sign-in check, a 413): the connection then cannot
+/// carry another request, so say `Connection: close` and a keep-alive client
+/// opens a fresh one instead of sending its next request into a closed socket.
+async fn close_after_refused_body(
+    req: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> axum::response::Response {
+    use axum::http::header::{CONNECTION, CONTENT_LENGTH, TRANSFER_ENCODING};
+    let headers = req.headers();
+    let has_body = headers.contains_key(TRANSFER_ENCODING)
+        || headers
+            .get(CONTENT_LENGTH)
+            .is_some_and(|v| v.as_bytes() != b"0");
+    let mut resp = next.run(req).await;
+    let status = resp.status();
+    if has_body && (status.is_client_error() || status.is_server_error()) {
+        resp.headers_mut()
+            .insert(CONNECTION, axum::http::HeaderValue::from_static("close"));
+    }
+    resp
 }
 
 /// Bind, call `ready` with the bound address, and serve until Ctrl-C / SIGTERM.
