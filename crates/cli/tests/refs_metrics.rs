@@ -1,5 +1,5 @@
 //! The metrics of `interslice evaluate` against the reference values of
-//! established libraries, on every case in `shared/refs/cases/`.
+//! established libraries, on every case in `tests/fixtures/refs/cases/`.
 //!
 //! Overlap metrics and voxel counts must match numpy (`numpy_ref`) exactly;
 //! border-voxel distances must match the exact border-voxel reference
@@ -13,10 +13,10 @@ use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 
 fn refs_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/refs");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/refs");
     assert!(
         dir.join("metrics_expected.json").is_file(),
-        "reference data not found at {} (the repository's sibling shared/refs)",
+        "reference data not found at {} (tests/fixtures/refs in the repository)",
         dir.display()
     );
     dir

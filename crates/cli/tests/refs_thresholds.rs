@@ -1,6 +1,6 @@
 //! The thresholds of `interslice segment` against the reference values of
 //! scikit-image, the Rosin variants and exact k-means in
-//! `shared/refs/thresholds_expected.json`, on every reference volume.
+//! `tests/fixtures/refs/thresholds_expected.json`, on every reference volume.
 //!
 //! For the volumes that ship as NIfTI files the volume is read with
 //! `interslice_io`, its histograms are checked bin for bin against the
@@ -25,10 +25,10 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 fn refs_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/refs");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/refs");
     assert!(
         dir.join("thresholds_expected.json").is_file(),
-        "reference data not found at {} (the repository's sibling shared/refs)",
+        "reference data not found at {} (tests/fixtures/refs in the repository)",
         dir.display()
     );
     dir

@@ -9,9 +9,10 @@ pub fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_interslice"))
 }
 
-/// `../shared/refs`: the reference cases and values.
+/// `tests/fixtures/refs` at the repository root: the reference cases and
+/// values computed by established libraries (see its `PROVENANCE.md`).
 pub fn refs() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/refs")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/refs")
 }
 
 /// Standard output of a successful run, parsed as JSON.
