@@ -4,6 +4,8 @@
 (a) Files that interslice writes (`interslice convert` from a SimpleITK file)
     are read by SimpleITK (and nibabel for NIfTI, tifffile for TIFF) with the
     same array, spacing, origin and direction.
+(c) 3D Slicer segmentations (.seg.nrrd) we write read in pynrrd and SimpleITK
+    with their segment names, colours and values, and read back (see part_c).
 (b) Files that SimpleITK, nibabel and tifffile write are read by interslice
     with the same values: `interslice info --json` for the geometry, type and
     range, and `interslice convert` to MetaImage for the voxels.
@@ -23,6 +25,7 @@ import sys
 import tempfile
 
 import nibabel as nib
+import nrrd
 import numpy as np
 import SimpleITK as sitk
 import tifffile
@@ -249,6 +252,49 @@ def part_b(tmp):
 binary_path = ""
 
 
+def part_c(binary, tmp):
+    """(c) Segment tables: a .seg.nrrd we write is read by pynrrd and SimpleITK
+    with 3D Slicer's segment names, colours and label values; an ITK-SNAP label
+    description file is written beside other label volumes; both read back."""
+    labels = np.zeros((NZ, NY, NX), dtype=np.uint8)
+    labels[1:3, 1:4, 2:5] = 1
+    labels[3, 2, 3] = 2
+    labels[0, 0, 0] = 5
+    src = os.path.join(tmp, "labels_src.nii.gz")
+    sitk.WriteImage(sitk_image(labels), src)
+    seg = os.path.join(tmp, "out.seg.nrrd")
+    run(binary, "convert", src, seg, "--components", "Tumour,Oedema")
+    data, header = nrrd.read(seg)
+    check("(c) pynrrd seg.nrrd voxels", np.array_equal(data, labels.transpose(2, 1, 0)), data.shape)
+    segs = {}
+    n = 0
+    while f"Segment{n}_LabelValue" in header:
+        segs[int(header[f"Segment{n}_LabelValue"])] = (
+            header[f"Segment{n}_Name"],
+            [float(c) for c in header[f"Segment{n}_Color"].split()],
+            header[f"Segment{n}_Layer"],
+        )
+        n += 1
+    check("(c) pynrrd segment names", {k: v[0] for k, v in segs.items()} == {1: "Tumour", 2: "Oedema", 5: "Label 5"}, segs)
+    check("(c) pynrrd segment colours", close(segs[1][1], [0xE6 / 255, 0x19 / 255, 0x4B / 255], 1e-5), segs.get(1))
+    check("(c) pynrrd segment layers", all(v[2] == "0" for v in segs.values()), segs)
+    check("(c) Slicer representation", header.get("Segmentation_MasterRepresentation") == "Binary labelmap", header)
+    img = sitk.ReadImage(seg)
+    check("(c) SimpleITK seg.nrrd voxels", np.array_equal(sitk.GetArrayFromImage(img), labels), img.GetSize())
+    check("(c) SimpleITK seg.nrrd spacing", close(img.GetSpacing(), SPACING, 1e-6), img.GetSpacing())
+    check("(c) SimpleITK segment name", img.GetMetaData("Segment1_Name") == "Oedema", img.GetMetaDataKeys())
+    # Back: our reader keeps the values and the names (--label by name).
+    back = os.path.join(tmp, "back.nii.gz")
+    run(binary, "convert", seg, back)
+    txt = os.path.join(tmp, "back.label.txt")
+    check("(c) ITK-SNAP label description beside the volume", os.path.isfile(txt), os.listdir(tmp))
+    if os.path.isfile(txt):
+        lines = [ln for ln in open(txt) if not ln.startswith("#")]
+        check("(c) ITK-SNAP description rows", any('"Tumour"' in ln and ln.split()[:4] == ["1", "230", "25", "75"] for ln in lines), lines)
+    out = json.loads(run(binary, "evaluate", seg, back, "--label", "oedema", "--json"))
+    check("(c) --label by name through the segment table", out["label"] == 2 and out["dice"] == 1.0, out)
+
+
 def main():
     global binary_path
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -261,6 +307,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="interslice-crosscheck-") as tmp:
         part_a(binary_path, tmp)
         part_b(tmp)
+        part_c(binary_path, tmp)
     print(f"{results['passed']} passed, {results['failed']} failed")
     return 1 if results["failed"] else 0
 

@@ -6,6 +6,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-need="SimpleITK nibabel numpy tifffile"
+need="SimpleITK nibabel numpy tifffile pynrrd=nrrd"
 . scripts/pyenv.sh
 "$venv/bin/python" scripts/crosscheck_formats.py --bin "$bin"

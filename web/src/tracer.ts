@@ -308,7 +308,7 @@ export class Tracer {
         ),
         h("div", { class: "row small" },
           "Export: ",
-          ...["nii.gz", "nrrd", "tiff", "contours"].map((f) => h("a", { href: this.host.api.exportUrl(this.cell.id, f), download: "", class: "exp" }, f)),
+          ...["nii.gz", "nrrd", "seg.nrrd", "tiff", "contours"].map((f) => h("a", { href: this.host.api.exportUrl(this.cell.id, f), download: "", class: "exp" }, f)),
         ),
       ),
     );

@@ -2,7 +2,7 @@
  * Canvas <-> slice coordinate transforms.
  *
  * A slice point is `(u, v)` in continuous pixel units: pixel `(a, b)` covers
- * `[a, a+1) x [b, b+1)` and its centre is `(a + 0.5, b + 0.5)` (DESIGN.md).
+ * `[a, a+1) x [b, b+1)` and its centre is `(a + 0.5, b + 0.5)` (docs/conventions.md).
  * Canvas coordinates are CSS pixels relative to the canvas' top-left corner;
  * the device-pixel ratio is applied only when painting, so pointer positions
  * and drawing share one transform.

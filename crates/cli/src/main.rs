@@ -3,6 +3,7 @@
 //! Errors print as one line `error: ...` and exit with status 1 (2 for usage).
 
 mod cmd;
+mod label;
 mod progress;
 
 use clap::{Parser, Subcommand};

@@ -1,4 +1,4 @@
-//! `interslice interpolate` through the binary: the contract of DESIGN.md
+//! `interslice interpolate` through the binary: its contract (docs/interpolation.md)
 //! (drawn slices, `--drawn`, `--list`, output geometry and format) and one-line
 //! errors with a non-zero exit on bad input.
 use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Volume};

@@ -2,11 +2,12 @@
 //! algorithms built on them (contours, rasterisation, metrics, thresholds).
 //!
 //! This crate does no I/O. Conventions (shared by every crate) are fixed in
-//! `DESIGN.md`: dims `(nx, ny, nz)`, voxel `(i, j, k)`, x-fastest storage
+//! `docs/conventions.md`: dims `(nx, ny, nz)`, voxel `(i, j, k)`, x-fastest storage
 //! `index = i + nx * (j + ny * k)`.
 #![deny(missing_docs)]
 
 pub mod contour;
+pub mod components;
 pub mod contour_file;
 pub mod edt;
 pub mod error;

@@ -1,7 +1,7 @@
 //! Contours → masks: rasterisation by the pixel-centre even-odd rule.
 //!
 //! A pixel `(u, v)` is inside a polygon when its centre `(u + 0.5, v + 0.5)`
-//! is inside by the even-odd rule (DESIGN.md). Several polygons are united:
+//! is inside by the even-odd rule (docs/conventions.md). Several polygons are united:
 //! each is filled by the even-odd rule on its own and the results are OR-ed,
 //! so two contours of one label that overlap do not cancel each other.
 //!

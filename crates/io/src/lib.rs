@@ -18,6 +18,7 @@ mod meta;
 mod nii;
 mod nrrd;
 mod planes;
+pub mod segmentation;
 mod tiff_stack;
 
 pub use error::IoError;

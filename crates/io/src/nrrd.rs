@@ -124,21 +124,20 @@ fn quoted_items(s: &str) -> Vec<String> {
     }
 }
 
-/// Read a NRRD file.
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
-    let mut r = raw::open(path)?;
-    let mut consumed = 0usize;
-    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
-    if !first.starts_with("NRRD000") {
-        return Err(IoError::invalid(
-            path,
-            "not a NRRD file (no NRRD000x magic line)",
-        ));
-    }
+/// The header fields (`name: value`, names lower-cased) and key/value pairs
+/// (`key:=value`) after the magic line, up to the blank line that ends an
+/// attached header (or the end of a detached one).
+type HeaderFields = (HashMap<String, String>, HashMap<String, String>);
+
+fn read_fields<R: BufRead>(
+    path: &Path,
+    r: &mut R,
+    consumed: &mut usize,
+) -> Result<HeaderFields, IoError> {
     let mut fields: HashMap<String, String> = HashMap::new();
     let mut keys: HashMap<String, String> = HashMap::new();
     // A detached header may end at the end of the file, without a blank line.
-    while let Some(line) = header::read_line(path, &mut r, &mut consumed)? {
+    while let Some(line) = header::read_line(path, r, consumed)? {
         if line.is_empty() {
             break;
         }
@@ -158,6 +157,36 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             ));
         }
     }
+    Ok((fields, keys))
+}
+
+/// The `key:=value` pairs of a NRRD header (3D Slicer keeps its segment
+/// table there), without reading the data.
+pub fn read_keys(path: &Path) -> Result<HashMap<String, String>, IoError> {
+    let mut r = raw::open(path)?;
+    let mut consumed = 0usize;
+    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
+    if !first.starts_with("NRRD000") {
+        return Err(IoError::invalid(
+            path,
+            "not a NRRD file (no NRRD000x magic line)",
+        ));
+    }
+    Ok(read_fields(path, &mut r, &mut consumed)?.1)
+}
+
+/// Read a NRRD file.
+pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
+    let mut r = raw::open(path)?;
+    let mut consumed = 0usize;
+    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
+    if !first.starts_with("NRRD000") {
+        return Err(IoError::invalid(
+            path,
+            "not a NRRD file (no NRRD000x magic line)",
+        ));
+    }
+    let (fields, keys) = read_fields(path, &mut r, &mut consumed)?;
     let get = |k: &str| fields.get(k).map(String::as_str);
     let need = |k: &str| {
         get(k).ok_or_else(|| IoError::invalid(path, format!("NRRD header has no '{k}' field")))
@@ -589,6 +618,12 @@ fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u
 
 /// Write a `.nrrd` file (attached gzip data) atomically.
 pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
+    write_with_keys(path, v, &[])
+}
+
+/// Write a `.nrrd` file with extra `key:=value` lines (3D Slicer's segment
+/// table); keys and values must not hold line breaks.
+pub fn write_with_keys(path: &Path, v: &AnyVolume, keys: &[(String, String)]) -> Result<(), IoError> {
     let g = v.geometry();
     let t = RawType::of(v);
     let vec3 = |x: [f64; 3]| format!("({},{},{})", num(x[0]), num(x[1]), num(x[2]));
@@ -598,7 +633,7 @@ pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
         "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n\
          type: {}\ndimension: 3\nspace: left-posterior-superior\nsizes: {} {} {}\n\
          space directions: {} {} {}\nkinds: domain domain domain\nendian: little\nencoding: gzip\n\
-         space origin: {}\nspace units: \"{u}\" \"{u}\" \"{u}\"\n\n",
+         space origin: {}\nspace units: \"{u}\" \"{u}\" \"{u}\"\n",
         type_name(t),
         g.dims[0],
         g.dims[1],
@@ -608,6 +643,14 @@ pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
         vec3(axis(2)),
         vec3(g.origin),
     );
+    let mut head = head;
+    for (k, val) in keys {
+        if k.contains(['\n', '\r']) || val.contains(['\n', '\r']) || k.contains(":=") {
+            return Err(IoError::invalid(path, format!("NRRD key '{k}' holds a line break")));
+        }
+        head.push_str(&format!("{k}:={val}\n"));
+    }
+    head.push('\n');
     let data = raw::encode_le(v);
     raw::write_atomic(path, |w| {
         w.write_all(head.as_bytes())?;

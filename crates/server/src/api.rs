@@ -866,7 +866,7 @@ pub fn export_bytes(
     let labels =
         groundtruth::label_volume(&state.store, geometry, cell, user.id, m.as_ref(), label)?;
     let name = format!("{base}.{ext}");
-    let bytes = label_file_bytes(&labels, &name)?;
+    let bytes = label_file_bytes(state, &labels, &name)?;
     Ok((bytes, name))
 }
 
@@ -888,25 +888,35 @@ fn result_bytes(
         .collect();
     let labels = LabelVolume::from_vec(mask.geometry().clone(), data)?;
     let name = format!("{cell}-result-{}.{ext}", meta.id);
-    Ok((label_file_bytes(&labels, &name)?, name))
+    Ok((label_file_bytes(state, &labels, &name)?, name))
 }
 
 /// The extension of a label volume export format, or 400.
 fn volume_extension(format: &str) -> Result<&str, ApiError> {
     match format {
-        "nii.gz" | "nii" | "nrrd" | "tiff" | "tif" | "mha" => Ok(format),
+        "nii.gz" | "nii" | "nrrd" | "seg.nrrd" | "tiff" | "tif" | "mha" => Ok(format),
         other => Err(ApiError::bad_request(format!(
-            "unknown export format '{other}' (nii.gz, nii, nrrd, mha, tiff or contours)"
+            "unknown export format '{other}' (nii.gz, nii, nrrd, seg.nrrd, mha, tiff or contours)"
         ))),
     }
 }
 
 /// The bytes of `labels` written as the file `name` (the writers take paths,
-/// so through a private temporary folder).
-fn label_file_bytes(labels: &LabelVolume, name: &str) -> Result<Vec<u8>, ApiError> {
+/// so through a private temporary folder). A `.seg.nrrd` carries the
+/// project's components as its segment table.
+fn label_file_bytes(
+    state: &SharedState,
+    labels: &LabelVolume,
+    name: &str,
+) -> Result<Vec<u8>, ApiError> {
     let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
     let path = dir.path().join(name);
-    interslice_io::write_labels(&path, labels)?;
+    if interslice_io::segmentation::is_seg_nrrd(&path) {
+        let components = state.store.components()?;
+        interslice_io::segmentation::write_segmentation(&path, labels, &components)?;
+    } else {
+        interslice_io::write_labels(&path, labels)?;
+    }
     std::fs::read(&path).map_err(|e| ApiError::internal(e.to_string()))
 }
 

@@ -22,6 +22,7 @@ pub mod error;
 pub mod groundtruth;
 pub mod loadtest;
 pub mod openapi;
+pub mod project_file;
 pub mod web;
 
 use anyhow::Context as _;
@@ -50,6 +51,10 @@ pub struct Config {
     pub body_limit: usize,
     /// Time limit of one request (interpolation of a large cell included).
     pub timeout: Duration,
+    /// The components to trace: written to the project file and made the
+    /// project's labels. None: the project file's, else the database's
+    /// (a new database starts with the cell-CT set).
+    pub components: Option<interslice_core::components::Components>,
 }
 
 impl Config {
@@ -64,6 +69,7 @@ impl Config {
             cache_cells: 4,
             body_limit: 16 << 20,
             timeout: Duration::from_secs(300),
+            components: None,
         }
     }
 }
@@ -99,6 +105,18 @@ impl AppState {
             .clone()
             .unwrap_or_else(|| interslice_store::default_db_path(&dir));
         let store = Store::open(&db).with_context(|| format!("cannot open {}", db.display()))?;
+        let components = match &config.components {
+            Some(c) => {
+                project_file::write_components(&dir, c)?;
+                Some(c.clone())
+            }
+            None => project_file::read_components(&dir)?,
+        };
+        if let Some(c) = &components {
+            store
+                .sync_components(c)
+                .context("cannot set the project's components")?;
+        }
         let auth_required = config.require_login || !config.bind.ip().is_loopback();
         let state = Arc::new(AppState {
             dir,

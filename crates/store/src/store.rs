@@ -1558,5 +1558,6 @@ impl Store {
     }
 }
 
+mod components;
 #[cfg(test)]
 mod tests;

@@ -3,7 +3,8 @@
 //! voxel type without loss (a float volume to PNG slices) nothing is written
 //! and the command fails.
 use anyhow::Context;
-use interslice_io::Format;
+use interslice_core::components::Components;
+use interslice_io::{Format, segmentation};
 use std::path::PathBuf;
 
 /// Arguments of `convert`.
@@ -17,8 +18,19 @@ pub struct Args {
     pub output: PathBuf,
     /// Store the volume as labels: integer values 0..=65535, written as u8
     /// when the largest is at most 255, else u16 (fails on other values).
+    /// (Implied by a `.seg.nrrd` output.)
     #[arg(long)]
     pub labels: bool,
+    /// With --labels: the components' names, comma-separated, valued 1, 2, …
+    /// ("Tumour,Oedema"); written as a `.seg.nrrd`'s segments or as an ITK-SNAP
+    /// label description file beside any other label volume. Default: the
+    /// components the input declares (its segments, or its NAME.label.txt).
+    #[arg(long, value_parser = parse_components)]
+    pub components: Option<Components>,
+}
+
+fn parse_components(s: &str) -> Result<Components, String> {
+    Components::from_names(s).map_err(|e| e.to_string())
 }
 
 /// Run `convert`.
@@ -26,9 +38,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Check both formats before reading a possibly large input.
     Format::of_path(&args.input)?;
     let out_format = Format::of_path(&args.output)?;
-    if args.labels {
+    let to_seg_nrrd = segmentation::is_seg_nrrd(&args.output);
+    if args.labels || to_seg_nrrd || args.components.is_some() {
         let v = interslice_io::read_labels(&args.input)?;
-        interslice_io::write_labels(&args.output, &v)?;
+        let components = match args.components {
+            Some(c) => c,
+            None => segmentation::read_components(&args.input)?,
+        };
+        if to_seg_nrrd || !components.is_empty() {
+            for f in segmentation::write_segmentation(&args.output, &v, &components)?.iter().skip(1) {
+                println!("wrote {}", f.display());
+            }
+        } else {
+            interslice_io::write_labels(&args.output, &v)?;
+        }
         let n = v.label_counts().len();
         let [nx, ny, nz] = v.dims();
         println!(
@@ -77,6 +100,7 @@ mod tests {
             input: input.to_path_buf(),
             output: output.to_path_buf(),
             labels,
+            components: None,
         })
     }
 

@@ -37,6 +37,8 @@ pub fn run(a: Args) -> Result<()> {
     }
     let mut config = interslice_server::Config::new(&a.dir);
     config.bind = a.bind;
+    // The demo is cell CT: its components are the study's set.
+    config.components = Some(interslice_core::components::Components::cell_ct());
     super::serve::serve(config)
 }
 

@@ -1,6 +1,6 @@
 //! `interslice evaluate GROUND_TRUTH SEGMENTATION [--label N] [--json] [--tolerance T]`:
 //! overlap and border-distance metrics of a segmentation against a ground
-//! truth (contract in DESIGN.md, conventions in docs/metrics.md).
+//! truth (conventions in docs/metrics.md).
 //!
 //! With `--label N`, voxels equal to N are foreground and `--json` prints one
 //! object. Without it, every non-zero label present in either volume is
@@ -37,8 +37,11 @@ pub struct Args {
     pub ground_truth: PathBuf,
     /// The label volume to measure, on the same grid.
     pub segmentation: PathBuf,
-    /// Evaluate only the voxels equal to N (for 0/1 masks, N = 1).
-    #[arg(long, value_name = "N")]
+    /// Evaluate only the voxels equal to N (for 0/1 masks, N = 1). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// Print JSON instead of a table.
     #[arg(long)]
@@ -73,7 +76,8 @@ fn check_geometry(gt: &LabelVolume, seg: &LabelVolume) -> Result<()> {
 }
 
 /// Run the command.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
+    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.ground_truth, &a.segmentation])).transpose()?;
     if !(a.tolerance.is_finite() && a.tolerance >= 0.0) {
         bail!(
             "--tolerance must be a finite number >= 0, got {}",

@@ -20,8 +20,11 @@ pub struct Args {
     /// Whose tracing.
     #[arg(long)]
     pub user: String,
-    /// Only this label (default: every label the user traced).
-    #[arg(long)]
+    /// Only this label (default: every label the user traced). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// Interpolation method (`interslice interpolate --list`; default the best).
     #[arg(long)]
@@ -29,16 +32,20 @@ pub struct Args {
     /// The annotation database (default DIR/.interslice/annotations.sqlite).
     #[arg(long)]
     pub db: Option<PathBuf>,
-    /// Output file: a label volume (.nii.gz, .nii, .nrrd, .mha, .tif) or `.contours.json`.
+    /// Output file: a label volume (.nii.gz, .nii, .nrrd, .mha, .tif; an ITK-SNAP
+    /// label description NAME.label.txt is written beside it), a 3D Slicer
+    /// segmentation (.seg.nrrd, with segment names and colours) or `.contours.json`.
     #[arg(long)]
     pub out: PathBuf,
 }
 
 /// Run the command.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
     let mut config = Config::new(&a.dir);
     config.db = a.db.clone();
     let state = AppState::open(&config)?;
+    let components = state.store.components()?;
+    a.label = a.label_arg.as_ref().map(|l| l.resolve_in(&components)).transpose()?;
     let path = state.cell_path(&a.cell)?;
     let user = state
         .store
@@ -68,8 +75,14 @@ pub fn run(a: Args) -> Result<()> {
         if labels.data().iter().all(|&v| v == 0) {
             bail!("the interpolated volume is empty");
         }
-        interslice_io::write_labels(&a.out, &labels)
-            .with_context(|| format!("writing {}", a.out.display()))?;
+        // A .seg.nrrd carries the component table; any other label volume
+        // gets an ITK-SNAP label description file beside it.
+        let written =
+            interslice_io::segmentation::write_segmentation(&a.out, &labels, &components)
+                .with_context(|| format!("writing {}", a.out.display()))?;
+        for f in written.iter().skip(1) {
+            eprintln!("wrote {}", f.display());
+        }
     }
     eprintln!("wrote {}", a.out.display());
     Ok(())

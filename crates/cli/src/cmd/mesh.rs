@@ -33,8 +33,11 @@ pub struct Args {
     /// Output mesh: .stl (binary), .ply (binary, or ASCII with --ascii) or .obj.
     #[arg(long)]
     pub out: PathBuf,
-    /// Only this label (default: every non-zero voxel; with --method every label on its own).
-    #[arg(long)]
+    /// Only this label (default: every non-zero voxel; with --method every label on its own). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// Mesh this method's interpolation of the sparse input (see `interpolate --list`).
     #[arg(long)]
@@ -51,7 +54,8 @@ pub struct Args {
 }
 
 /// Run `mesh`.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
+    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.labels])).transpose()?;
     let mut format = MeshFormat::of_path(&a.out)?;
     if a.ascii {
         if format != MeshFormat::PlyBinary {

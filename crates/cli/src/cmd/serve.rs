@@ -21,6 +21,15 @@ pub struct Args {
     /// Largest request body accepted, in MiB (larger requests get 413).
     #[arg(long, default_value_t = 16)]
     pub body_limit_mib: usize,
+    /// The components traced in this project, comma-separated ("Tumour,Oedema"),
+    /// valued 1, 2, … in order; kept in DIR/interslice.toml. Default: the
+    /// project file's, else Cell, Nucleus, Nucleolus 1, Nucleolus 2.
+    #[arg(long, value_parser = parse_components)]
+    pub components: Option<interslice_core::components::Components>,
+}
+
+fn parse_components(s: &str) -> Result<interslice_core::components::Components, String> {
+    interslice_core::components::Components::from_names(s).map_err(|e| e.to_string())
 }
 
 impl Args {
@@ -31,6 +40,7 @@ impl Args {
         c.db = self.db.clone();
         c.require_login = self.require_login;
         c.body_limit = self.body_limit_mib << 20;
+        c.components = self.components.clone();
         c
     }
 }

@@ -23,8 +23,11 @@ pub struct Args {
     /// The consensus label volume to write.
     #[arg(long)]
     pub out: PathBuf,
-    /// Only this label (voxels equal to L are foreground).
-    #[arg(long, value_name = "L")]
+    /// Only this label (voxels equal to L are foreground). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// With --label: write the posterior probability of every voxel (f32).
     #[arg(long, value_name = "FILE")]
@@ -65,7 +68,8 @@ fn finite(x: f64) -> Option<f64> {
 }
 
 /// Run the command.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
+    a.label = a.label_arg.as_ref().map(|l| l.resolve(&a.raters.iter().map(|p| p.as_path()).collect::<Vec<_>>())).transpose()?;
     if a.raters.len() > MAX_RATERS {
         bail!(
             "STAPLE takes at most {MAX_RATERS} raters, got {}",

@@ -43,8 +43,11 @@ pub struct Args {
     /// Comma-separated methods (default: every registered method).
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
-    /// Study only this label (default: every label of the ground truth).
-    #[arg(long)]
+    /// Study only this label (default: every label of the ground truth). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// NSD tolerance in physical units.
     #[arg(long, default_value_t = interslice_core::metrics::DEFAULT_TOLERANCE)]
@@ -82,7 +85,8 @@ const PLOTTED: &[(&str, &str, bool)] = &[
 ];
 
 /// Run `study`.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
+    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.ground_truth])).transpose()?;
     let skips = parse_skips(&a.skips)?;
     let chosen: Vec<Box<dyn Interpolator>> = match &a.methods {
         Some(names) => names

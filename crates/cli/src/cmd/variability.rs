@@ -37,8 +37,11 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// The project folder (what `interslice serve DIR` serves).
     pub dir: PathBuf,
-    /// Only this label (1 cell, 2 nucleus, ...).
-    #[arg(long, value_name = "L")]
+    /// Only this label (1 cell, 2 nucleus, ...). A number or a component's name.
+    #[arg(long = "label", value_name = "L")]
+    pub label_arg: Option<crate::label::LabelArg>,
+    /// `--label` resolved to its value (set by `run`).
+    #[arg(skip)]
     pub label: Option<u16>,
     /// Output folder (default DIR/variability).
     #[arg(long)]
@@ -197,7 +200,7 @@ fn label_row(
 }
 
 /// Run the command.
-pub fn run(a: Args) -> Result<()> {
+pub fn run(mut a: Args) -> Result<()> {
     if !a.dir.is_dir() {
         bail!("{} is not a folder", a.dir.display());
     }
@@ -210,6 +213,8 @@ pub fn run(a: Args) -> Result<()> {
         );
     }
     let store = Store::open(&db).with_context(|| format!("opening {}", db.display()))?;
+    let components = store.components()?;
+    a.label = a.label_arg.as_ref().map(|l| l.resolve_in(&components)).transpose()?;
     let method = interslice_server::api::method_by_name(a.method.as_deref())
         .map_err(|e| anyhow::anyhow!("{}", e.message))?;
     let out = a.out.clone().unwrap_or_else(|| a.dir.join("variability"));
