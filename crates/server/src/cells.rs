@@ -387,6 +387,9 @@ mod tests {
         let v = Volume::from_vec(g, vec![-1024i16, -1000, 40, 3071]).unwrap();
         let c = LoadedCell::from_volume(AnyVolume::I16(v));
         assert_eq!((c.min, c.max, c.bin_width), (-1024.0, 3071.0, 16.0));
-        assert_eq!((c.counts[0], c.counts[1], c.counts[66], c.counts[255]), (1, 1, 1, 1));
+        assert_eq!(
+            (c.counts[0], c.counts[1], c.counts[66], c.counts[255]),
+            (1, 1, 1, 1)
+        );
     }
 }
