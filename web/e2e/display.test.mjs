@@ -1,15 +1,52 @@
 // Looking at a cell, against the real `interslice demo` server: linked views
 // (a click on a small view moves the working slice), zoom about the cursor,
 // keyboard stepping, window/level and brightness on 8- and 16-bit data, the
-// status line, adding a component.
+// status line, adding a component; signed (CT in Hounsfield units), float and
+// scaled (NIfTI scl_slope/scl_inter) volumes shown right in all three views.
 import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
 import path from "node:path";
-import { cli, signIn, startBrowser, startDemo, waitTracer } from "./harness.mjs";
+import { cli, greysIn, painted, pixelsIn, signIn, startBrowser, startDemo, viewStats, waitTracer, writeNifti } from "./harness.mjs";
 
 let demo;
 let br;
+
+/** Dims of the synthetic scans: all different, so a wrong stride on any axis shows. */
+const SCAN = [96, 80, 40];
+
+/**
+ * A chest-CT-like volume in Hounsfield units (air -1000 around a body of soft
+ * tissue at 40 with two lungs at -850 and a spine at 700, a little noise) and
+ * an MR-like float volume (0 outside, a smooth 200..800 inside an
+ * ellipsoid), written as int16, as uint16 with scl_inter -1024 (how scanners
+ * often store CT: read as calibrated floats) and as float32.
+ */
+function writeSyntheticScans(dir) {
+  const [nx, ny, nz] = SCAN;
+  const n = nx * ny * nz;
+  const hu = new Int16Array(n);
+  const mr = new Float32Array(n);
+  let seed = 7;
+  const noise = () => ((seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648 - 0.5) * 2;
+  for (let k = 0; k < nz; k++)
+    for (let j = 0; j < ny; j++)
+      for (let i = 0; i < nx; i++) {
+        const p = i + nx * (j + ny * k);
+        const e = (x, y, z, rx, ry, rz) => ((i - x) / rx) ** 2 + ((j - y) / ry) ** 2 + ((k - z) / rz) ** 2;
+        let v = -1000 + 8 * noise();
+        if (e(48, 40, 0, 42, 32, 1e9) < 1) v = 40 + 10 * noise();
+        if (e(30, 38, 20, 12, 15, 16) < 1 || e(66, 38, 20, 12, 15, 16) < 1) v = -850 + 20 * noise();
+        if (e(48, 64, 0, 6, 5, 1e9) < 1) v = 700 + 30 * noise();
+        hu[p] = Math.round(v);
+        const r = e(48, 40, 20, 38, 30, 17);
+        mr[p] = r < 1 ? 200 + 600 * (1 - r) + 0.37 * noise() : Math.abs(3 * noise());
+      }
+  const spacing = [0.8, 0.8, 2.5];
+  writeNifti(path.join(dir, "ct_i16.nii"), { dims: SCAN, spacing, values: hu });
+  writeNifti(path.join(dir, "ct_u16_scaled.nii"), { dims: SCAN, spacing, values: Uint16Array.from(hu, (x) => x + 1024), slope: 1, inter: -1024 });
+  writeNifti(path.join(dir, "mr_f32.nii"), { dims: SCAN, spacing, values: mr });
+}
 
 const summary = () => br.page.evaluate(() => window.__interslice.tracer().summary());
 const client = (axis, u, v) => br.page.evaluate(([a, x, y]) => window.__interslice.tracer().sliceToClient(a, x, y), [axis, u, v]);
@@ -21,6 +58,7 @@ before(async () => {
   const ph = path.join(demo.scratch, "phantom16");
   cli("phantom", "--out", ph, "--count", "1", "--size", "64", "--bits", "16", "--quiet");
   fs.copyFileSync(path.join(ph, "cell_001.nii.gz"), path.join(demo.dir, "deep_16bit.nii.gz"));
+  writeSyntheticScans(demo.dir);
   br = await startBrowser();
   await signIn(br.page, demo.url, "carol");
 });
@@ -98,6 +136,41 @@ test("16-bit data: the automatic window and the values are in the raw range", as
   await page.getByTestId("status-voxel").filter({ hasText: "(32, 32," }).waitFor();
   const v = Number((await page.getByTestId("status-value").textContent()).replace("value ", ""));
   assert.ok(v > 255, `raw 16-bit value under the cursor: ${v}`);
+});
+
+test("signed, scaled and float scans: air dark, anatomy in all three views, values in the file's units", async () => {
+  const { page } = br;
+  for (const [cell, dtype] of [["ct_i16", "i16"], ["ct_u16_scaled", "f32"], ["mr_f32", "f32"]]) {
+    await page.goto(`${demo.url}/#/cells`);
+    await page.getByTestId(`open-cell-${cell}`).click();
+    await waitTracer(page, cell);
+    await painted(page);
+    assert.equal(await page.evaluate(() => window.__interslice.tracer().cell.dtype), dtype, cell);
+    const ct = cell.startsWith("ct");
+    assert.equal(await page.getByTestId("window-preset").inputValue(), ct ? "ct-lung" : "auto", `${cell}: preset`);
+    for (const a of ["x", "y", "z"]) {
+      const s = await viewStats(page, a);
+      assert.ok(s.neighbour < 0.5 && s.std > 30, `${cell} view ${a}: anatomy, not noise or stripes: ${JSON.stringify(s)}`);
+      if (ct) {
+        const air = await greysIn(page, a, -1100, -980);
+        const tissue = await greysIn(page, a, 20, 60);
+        assert.ok(air.n > 0 && air.max <= 62, `${cell} view ${a}: air dark ${JSON.stringify(air)}`);
+        assert.ok(tissue.n > 0 && tissue.min >= 234, `${cell} view ${a}: soft tissue bright ${JSON.stringify(tissue)}`);
+      } else {
+        const outside = await greysIn(page, a, 0, 3);
+        const inside = await greysIn(page, a, 700, 800);
+        assert.ok(outside.n > 0 && outside.max <= 10, `${cell} view ${a}: background dark ${JSON.stringify(outside)}`);
+        assert.ok(inside.n > 0 && inside.min >= 200, `${cell} view ${a}: bright centre ${JSON.stringify(inside)}`);
+      }
+    }
+    // The value under the cursor, as the file means it (Hounsfield units for the scaled file).
+    const [[u, v, val]] = await pixelsIn(page, "z", ct ? -1100 : 700, ct ? -980 : 800, 1);
+    const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+    await page.mouse.move(x, y);
+    const want = dtype === "f32" ? String(Number(Math.fround(val).toPrecision(6))) : String(val);
+    await page.getByTestId("status-value").filter({ hasText: new RegExp(`^value ${want}$`) }).waitFor();
+    if (ct) assert.ok(Number(want) <= -980, `${cell}: air in Hounsfield units (${want})`);
+  }
 });
 
 test("add a component: it gets a colour and is selected", async () => {

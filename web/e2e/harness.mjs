@@ -211,3 +211,176 @@ export async function shot(page, name) {
   fs.mkdirSync(dir, { recursive: true });
   await page.screenshot({ path: path.join(dir, `${name}.png`) });
 }
+
+/** Resolves after the page has painted two more frames (views paint on animation frames). */
+export function painted(page) {
+  return page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => r()))));
+}
+
+/**
+ * The grey level (red channel) that view `axis` shows at the centre of each
+ * slice pixel `[u, v]`, read back from its canvas.
+ */
+export function canvasGreys(page, axis, pixels) {
+  return page.evaluate(
+    ([a, ps]) => {
+      const t = window.__interslice.tracer();
+      const c = document.querySelector(`[data-testid="view-${a}"]`);
+      const r = c.getBoundingClientRect();
+      const dpr = c.width / r.width;
+      const ctx = c.getContext("2d");
+      return ps.map(([u, v]) => {
+        const [x, y] = t.sliceToClient(a, u + 0.5, v + 0.5);
+        return ctx.getImageData(Math.floor((x - r.left) * dpr), Math.floor((y - r.top) * dpr), 1, 1).data[0];
+      });
+    },
+    [axis, pixels],
+  );
+}
+
+/**
+ * What view `axis` shows, from its canvas pixels over the slice (grey pixels
+ * only, so crosshairs and contours do not count): the mean and standard
+ * deviation of the grey levels, the fractions near black and near white, and
+ * `neighbour`: the mean grey difference between pixels one voxel apart
+ * divided by that between random pairs of pixels. A picture of anatomy has
+ * smooth regions (well below 0.5); noise, such as signed values read as
+ * unsigned, has about 1.
+ */
+export function viewStats(page, axis) {
+  return page.evaluate((a) => {
+    const t = window.__interslice.tracer();
+    const c = document.querySelector(`[data-testid="view-${a}"]`);
+    const r = c.getBoundingClientRect();
+    const dpr = c.width / r.width;
+    const [w, h] = t.sliceSize(a);
+    const [cx0, cy0] = t.sliceToClient(a, 0, 0);
+    const [cx1, cy1] = t.sliceToClient(a, w, h);
+    const x0 = Math.max(0, Math.ceil((cx0 - r.left) * dpr));
+    const y0 = Math.max(0, Math.ceil((cy0 - r.top) * dpr));
+    const x1 = Math.min(c.width, Math.floor((cx1 - r.left) * dpr));
+    const y1 = Math.min(c.height, Math.floor((cy1 - r.top) * dpr));
+    const W = x1 - x0;
+    const H = y1 - y0;
+    const d = c.getContext("2d").getImageData(x0, y0, W, H).data;
+    // One voxel's size in canvas pixels (at least 1), so neighbours are distinct voxels.
+    const sx = Math.max(1, Math.ceil(((cx1 - cx0) * dpr) / w));
+    const sy = Math.max(1, Math.ceil(((cy1 - cy0) * dpr) / h));
+    const g = (x, y) => {
+      const o = 4 * (x + W * y);
+      return d[o] === d[o + 1] && d[o] === d[o + 2] ? d[o] : -1;
+    };
+    let n = 0, sum = 0, sum2 = 0, black = 0, white = 0;
+    const greys = [];
+    for (let y = 0; y < H; y += sy) {
+      for (let x = 0; x < W; x += sx) {
+        const v = g(x, y);
+        if (v < 0) continue;
+        n++;
+        sum += v;
+        sum2 += v * v;
+        if (v < 16) black++;
+        if (v > 239) white++;
+        greys.push(v);
+      }
+    }
+    let adj = 0, na = 0;
+    for (let y = 0; y + sy < H; y += sy) {
+      for (let x = 0; x + sx < W; x += sx) {
+        const v = g(x, y), right = g(x + sx, y), down = g(x, y + sy);
+        if (v < 0) continue;
+        if (right >= 0) { adj += Math.abs(v - right); na++; }
+        if (down >= 0) { adj += Math.abs(v - down); na++; }
+      }
+    }
+    // Random pairs from a fixed linear congruential sequence (repeatable).
+    let seed = 12345, rnd = 0;
+    const next = () => (seed = (seed * 1103515245 + 12345) % 2147483648) % greys.length;
+    for (let k = 0; k < 20000; k++) rnd += Math.abs(greys[next()] - greys[next()]);
+    const mean = sum / n;
+    return {
+      n,
+      mean,
+      std: Math.sqrt(Math.max(0, sum2 / n - mean * mean)),
+      black: black / n,
+      white: white / n,
+      neighbour: rnd > 0 ? adj / na / (rnd / 20000) : 1,
+    };
+  }, axis);
+}
+
+/**
+ * Write a NIfTI-1 file (little-endian, `.nii`): `values` a typed array in x
+ * fastest order of type u8, i16, u16, f32 (NIfTI codes 2, 4, 512, 16);
+ * `slope`/`inter` the scl_slope/scl_inter the file declares.
+ */
+export function writeNifti(file, { dims, spacing = [1, 1, 1], values, slope = 0, inter = 0 }) {
+  const types = new Map([
+    [Uint8Array, [2, 8]],
+    [Int16Array, [4, 16]],
+    [Uint16Array, [512, 16]],
+    [Float32Array, [16, 32]],
+  ]);
+  const [code, bitpix] = types.get(values.constructor) ?? [];
+  if (!code) throw new Error("writeNifti: values must be Uint8Array, Int16Array, Uint16Array or Float32Array");
+  if (values.length !== dims[0] * dims[1] * dims[2]) throw new Error("writeNifti: values do not match dims");
+  const buf = Buffer.alloc(352 + values.length * (bitpix / 8));
+  buf.writeInt32LE(348, 0);
+  [3, ...dims, 1, 1, 1, 1].forEach((d, n) => buf.writeInt16LE(d, 40 + 2 * n));
+  buf.writeInt16LE(code, 70);
+  buf.writeInt16LE(bitpix, 72);
+  [1, ...spacing, 1, 1, 1, 1].forEach((p, n) => buf.writeFloatLE(p, 76 + 4 * n));
+  buf.writeFloatLE(352, 108);
+  buf.writeFloatLE(slope, 112);
+  buf.writeFloatLE(inter, 116);
+  buf.writeUInt8(2, 123); // mm
+  buf.write("n+1\0", 344, "latin1");
+  const dv = new DataView(buf.buffer, buf.byteOffset + 352);
+  values.forEach((v, i) => {
+    if (code === 2) dv.setUint8(i, v);
+    else if (code === 4) dv.setInt16(2 * i, v, true);
+    else if (code === 512) dv.setUint16(2 * i, v, true);
+    else dv.setFloat32(4 * i, v, true);
+  });
+  fs.writeFileSync(file, buf);
+}
+
+/**
+ * Pixels of the slice that view `axis` shows whose 3x3 neighbourhood lies
+ * wholly in `[lo, hi]` (raw values from the slice route), spread over the
+ * slice, at most `max` of them, away from the crosshair lines: `[u, v, value]`.
+ */
+export function pixelsIn(page, axis, lo, hi, max = 40) {
+  return page.evaluate(
+    async ([a, lo, hi, max]) => {
+      const t = window.__interslice.tracer();
+      const [w, h, index] = t.sliceSize(a);
+      const r = await fetch(`/api/cells/${t.cell.id}/slices/${a}/${index}`);
+      const dtype = r.headers.get("X-Dtype");
+      const dv = new DataView(await r.arrayBuffer());
+      const at = (u, v) => (dtype === "i16" ? dv.getInt16(2 * (u + w * v), true) : dtype === "u16" ? dv.getUint16(2 * (u + w * v), true) : dtype === "f32" ? dv.getFloat32(4 * (u + w * v), true) : dv.getUint8(u + w * v));
+      const cross = (u, v) => Math.abs(u + 0.5 - w / 2) < 3 || Math.abs(v + 0.5 - h / 2) < 3;
+      const found = [];
+      for (let v = 1; v < h - 1; v++) {
+        for (let u = 1; u < w - 1; u++) {
+          let ok = !cross(u, v);
+          for (let dv2 = -1; ok && dv2 <= 1; dv2++) for (let du = -1; ok && du <= 1; du++) {
+            const x = at(u + du, v + dv2);
+            ok = x >= lo && x <= hi;
+          }
+          if (ok) found.push([u, v, at(u, v)]);
+        }
+      }
+      const step = Math.max(1, Math.floor(found.length / max));
+      return found.filter((_, n) => n % step === 0).slice(0, max);
+    },
+    [axis, lo, hi, max],
+  );
+}
+
+/** The grey levels view `axis` shows for voxels in `[lo, hi]`, with how many there were. */
+export async function greysIn(page, axis, lo, hi) {
+  const px = await pixelsIn(page, axis, lo, hi);
+  const greys = await canvasGreys(page, axis, px.map(([u, v]) => [u, v]));
+  return { n: px.length, min: Math.min(...greys), max: Math.max(...greys) };
+}

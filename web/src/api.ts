@@ -2,6 +2,7 @@
  * Typed client of the interslice HTTP API (docs/API.md).
  */
 import type { Axis, Vec2 } from "./transform";
+import { parseDtype, type Dtype } from "./windowing";
 
 /** An error answer of the API (status and the server's one-line message). */
 export class ApiError extends Error {
@@ -32,7 +33,8 @@ export interface Cell {
   dims: [number, number, number];
   spacing: [number, number, number];
   unit: string;
-  dtype: "u8" | "u16";
+  /** Voxel type of the volume (also the slices'). */
+  dtype: Dtype;
   status: "not_started" | "in_progress" | "done";
   /** Seconds this user spent tracing it. */
   seconds: number;
@@ -114,7 +116,7 @@ export interface Mesh {
 export interface RawSlice {
   width: number;
   height: number;
-  dtype: "u8" | "u16";
+  dtype: Dtype;
   data: ArrayBuffer;
 }
 
@@ -234,7 +236,7 @@ export class Api {
     const data = await r.arrayBuffer();
     const width = Number(r.headers.get("X-Width"));
     const height = Number(r.headers.get("X-Height"));
-    const dtype = (r.headers.get("X-Dtype") ?? "u8") as "u8" | "u16";
+    const dtype = parseDtype(r.headers.get("X-Dtype"));
     return { width, height, dtype, data };
   }
   /** POST /api/cells/{cell}/time */

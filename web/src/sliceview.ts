@@ -9,6 +9,7 @@ import { getStroke } from "perfect-freehand";
 import { canvasToSlice, fitTransform, panBy, sliceToCanvas, zoomAt, type Axis, type Vec2, type ViewTransform } from "./transform";
 import type { Sample } from "./stroke";
 import { samplesOf } from "./stroke";
+import type { RawPixels } from "./windowing";
 
 /** A decoded slice image ready to paint. */
 export interface SliceImage {
@@ -16,8 +17,8 @@ export interface SliceImage {
   width: number;
   /** Rows. */
   height: number;
-  /** Raw intensities (for the status line). */
-  raw: Uint8Array | Uint16Array;
+  /** Raw intensities in the volume's voxel type (for the status line). */
+  raw: RawPixels;
   /** The windowed grey picture at native resolution. */
   bitmap: HTMLCanvasElement;
   /** The LUT version the bitmap was made with. */

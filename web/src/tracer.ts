@@ -13,7 +13,7 @@ import { SHORTCUTS, actionOf, type Action } from "./shortcuts";
 import { SliceView, type PaintContour, type PaintRect, type SliceImage } from "./sliceview";
 import { StrokeRecorder, type FinishedContour, type Sample } from "./stroke";
 import { axisDim, inPlane, pixelAt, sliceShape, voxelOf, type Axis, type Vec2 } from "./transform";
-import { applyBrightnessContrast, autoWindow, buildLut, decodeSlice, renderGrey, type Histogram, type Window } from "./windowing";
+import { AUTO_PRESET, applyBrightnessContrast, buildLut, decodeSlice, defaultPreset, formatValue, presetsFor, presetWindow, renderGrey, windowText, type Histogram, type Lut, type Preset, type Window } from "./windowing";
 import type { Viewer3D } from "./view3d";
 
 /** Colours of the crosshair lines that stand for each axis' slice. */
@@ -43,6 +43,10 @@ interface ViewState {
   method: string;
   brightness: number;
   contrast: number;
+  /** The base window: a preset id, or "manual" for `manual`. Empty: the cell's default preset. */
+  preset: string;
+  /** The window typed in by hand (with preset "manual"). */
+  manual: Window | null;
 }
 
 /** What the app shell gives the tracer. */
@@ -71,7 +75,8 @@ export class Tracer {
   private hist: Histogram | null = null;
   private baseWin: Window = { lo: 0, hi: 255 };
   private win: Window = { lo: 0, hi: 255 };
-  private lut: Uint8Array = new Uint8Array(256);
+  private lut: Lut = buildLut("u8", { lo: 0, hi: 255 });
+  private presets: Preset[] = [AUTO_PRESET];
   private lutVersion = 0;
   private cache = new Map<string, SliceImage>();
   private inflight = new Map<string, Promise<SliceImage>>();
@@ -156,6 +161,8 @@ export class Tracer {
       method: "",
       brightness: 0,
       contrast: 0,
+      preset: "",
+      manual: null,
     };
     try {
       const s = JSON.parse(localStorage.getItem(this.stateKey()) ?? "null") as Partial<ViewState> | null;
@@ -165,6 +172,9 @@ export class Tracer {
         m.focus = m.focus.map((f, i) => Math.min(d[i] - 1, Math.max(0, Math.round(Number(f) || 0)))) as [number, number, number];
         m.skip = Math.max(1, Math.round(Number(m.skip) || 1));
         if (!this.labels.some((l) => l.id === m.label)) m.label = def.label;
+        const mw = m.manual;
+        if (!(mw && Number.isFinite(mw.lo) && Number.isFinite(mw.hi) && mw.hi > mw.lo)) m.manual = null;
+        if (typeof m.preset !== "string" || (m.preset === "manual" && !m.manual)) m.preset = "";
         return m;
       }
     } catch {
@@ -243,8 +253,9 @@ export class Tracer {
     } }) as HTMLInputElement;
     e.bright = bright;
     e.contrast = contrast;
-    e.wlo = h("input", { testid: "window-low", type: "number", title: "Window low (black)", class: "num", onchange: () => this.manualWindow() });
-    e.whi = h("input", { testid: "window-high", type: "number", title: "Window high (white)", class: "num", onchange: () => this.manualWindow() });
+    e.wlo = h("input", { testid: "window-low", type: "number", step: "any", title: "Window low (black), in the file's units", class: "num", onchange: () => this.manualWindow() });
+    e.whi = h("input", { testid: "window-high", type: "number", step: "any", title: "Window high (white), in the file's units", class: "num", onchange: () => this.manualWindow() });
+    e.preset = h("select", { testid: "window-preset", title: "Window preset", onchange: (ev: Event) => this.choosePreset((ev.target as HTMLSelectElement).value) });
 
     const btn = (testid: string | null, text: string, title: string, action: () => void, cls = "") =>
       h("button", { testid: testid ?? undefined, title, class: cls, onclick: () => action() }, text);
@@ -290,6 +301,7 @@ export class Tracer {
         h("h3", {}, "Display"),
         h("div", { class: "row" }, h("label", { class: "w" }, "Brightness"), bright),
         h("div", { class: "row" }, h("label", { class: "w" }, "Contrast"), contrast),
+        h("div", { class: "row" }, h("label", { class: "w" }, "Preset"), e.preset),
         h("div", { class: "row" }, h("label", { class: "w" }, "Window"), e.wlo, h("span", {}, "–"), e.whi),
         h("div", { class: "row" },
           btn("auto-window", "Auto", "Automatic window from the histogram (W)", () => this.autoWin()),
@@ -359,7 +371,9 @@ export class Tracer {
     const [hist, methods] = await Promise.all([api.histogram(this.cell.id).catch(() => null), api.methods().catch(() => [] as Method[])]);
     this.hist = hist;
     this.methods = methods;
-    this.baseWin = hist ? autoWindow(hist) : { lo: this.cell.min, hi: this.cell.max > this.cell.min ? this.cell.max : this.cell.min + 1 };
+    this.presets = presetsFor(hist, this.cell.dtype);
+    this.baseWin = this.baseWindow();
+    this.fillPresets();
     this.fillLabels();
     this.fillMethods();
     this.applyWindow(false);
@@ -445,8 +459,9 @@ export class Tracer {
     (this.el.skip as HTMLInputElement).value = String(this.st.skip);
     (this.el.label as HTMLSelectElement).value = String(this.st.label);
     (this.el.swatch as HTMLElement).style.background = this.labelOf(this.st.label).color;
-    (this.el.wlo as HTMLInputElement).value = String(Math.round(this.win.lo));
-    (this.el.whi as HTMLInputElement).value = String(Math.round(this.win.hi));
+    (this.el.wlo as HTMLInputElement).value = windowText(this.win.lo, this.cell.dtype);
+    (this.el.whi as HTMLInputElement).value = windowText(this.win.hi, this.cell.dtype);
+    (this.el.preset as HTMLSelectElement).value = this.st.preset === "manual" ? "manual" : this.currentPreset().id;
   }
 
   /** Put the working view in the big slot, the others beside it. */
@@ -473,11 +488,30 @@ export class Tracer {
     this.lutVersion++;
   }
 
-  private manualWindow(): void {
-    const lo = Number((this.el.wlo as HTMLInputElement).value);
-    const hi = Number((this.el.whi as HTMLInputElement).value);
-    if (!(hi > lo)) return;
-    this.baseWin = { lo, hi };
+  private fillPresets(): void {
+    const sel = this.el.preset as HTMLSelectElement;
+    clear(sel);
+    for (const p of this.presets) {
+      const lw = p.level !== undefined ? ` (L ${p.level} / W ${p.width})` : "";
+      sel.append(h("option", { value: p.id }, p.name + lw));
+    }
+    sel.append(h("option", { value: "manual", disabled: true }, "Manual"));
+  }
+
+  /** The preset in force: the chosen one when this cell offers it, else the cell's default. */
+  private currentPreset(): Preset {
+    return this.presets.find((p) => p.id === this.st.preset) ?? defaultPreset(this.hist, this.cell.dtype);
+  }
+
+  /** The base window of the view settings: the manual one, or the preset's. */
+  private baseWindow(): Window {
+    if (this.st.preset === "manual" && this.st.manual) return this.st.manual;
+    return presetWindow(this.currentPreset(), this.hist, this.cell);
+  }
+
+  /** Set the base window and reset brightness and contrast. */
+  private setBase(w: Window): void {
+    this.baseWin = w;
     this.st.brightness = 0;
     this.st.contrast = 0;
     (this.el.bright as HTMLInputElement).value = "0";
@@ -485,13 +519,25 @@ export class Tracer {
     this.applyWindow();
   }
 
+  private choosePreset(id: string): void {
+    const p = this.presets.find((q) => q.id === id);
+    if (!p) return;
+    this.st.preset = p.id;
+    this.st.manual = null;
+    this.setBase(presetWindow(p, this.hist, this.cell));
+  }
+
+  private manualWindow(): void {
+    const lo = Number((this.el.wlo as HTMLInputElement).value);
+    const hi = Number((this.el.whi as HTMLInputElement).value);
+    if (!(Number.isFinite(lo) && Number.isFinite(hi) && hi > lo)) return;
+    this.st.preset = "manual";
+    this.st.manual = { lo, hi };
+    this.setBase({ lo, hi });
+  }
+
   private autoWin(): void {
-    if (this.hist) this.baseWin = autoWindow(this.hist);
-    this.st.brightness = 0;
-    this.st.contrast = 0;
-    (this.el.bright as HTMLInputElement).value = "0";
-    (this.el.contrast as HTMLInputElement).value = "0";
-    this.applyWindow();
+    this.choosePreset(AUTO_PRESET.id);
   }
 
   // ---------- slices ----------
@@ -1019,7 +1065,7 @@ export class Tracer {
       if (px) {
         const [i, j, k] = voxelOf(this.cursor.axis, v.index, px[0], px[1]);
         where = `(${i}, ${j}, ${k})`;
-        if (v.image) value = String(v.image.raw[px[0] + v.image.width * px[1]]);
+        if (v.image) value = formatValue(v.image.raw[px[0] + v.image.width * px[1]], this.cell.dtype);
       }
     }
     const d = this.drawn.get(idx);
@@ -1113,6 +1159,12 @@ export class Tracer {
   /** Slice -> client coordinates of a view (for the end-to-end test). */
   sliceToClient(a: Axis, u: number, v: number): Vec2 {
     return this.views[a].sliceToClient(u, v);
+  }
+
+  /** Width and height of view `a`'s slices, and the slice it shows. */
+  sliceSize(a: Axis): [number, number, number] {
+    const v = this.views[a];
+    return [v.size[0], v.size[1], v.index];
   }
 
   /** Resolves when every change is saved and no preview is running. */

@@ -143,13 +143,13 @@ pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
 pub struct LoadedCell {
     /// The voxels.
     pub volume: AnyVolume,
-    /// Smallest intensity.
+    /// Smallest finite intensity.
     pub min: f64,
-    /// Largest intensity.
+    /// Largest finite intensity.
     pub max: f64,
     /// Width of a histogram bin.
     pub bin_width: f64,
-    /// 256 histogram bins from `min`.
+    /// 256 histogram bins from `min` (finite voxels only).
     pub counts: Vec<u64>,
     /// BLAKE3 of the dims and voxel bytes (detects a file changed under tracings).
     pub content_hash: String,
@@ -162,13 +162,11 @@ fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
             || vec![0u64; 256],
             |mut acc, chunk| {
                 for &x in chunk {
-                    let b = ((x.to_f64() - min) / width).floor();
-                    let b = if b.is_finite() {
-                        b.clamp(0.0, 255.0) as usize
-                    } else {
-                        0
-                    };
-                    acc[b] += 1;
+                    let x = x.to_f64();
+                    // NaN and infinities (float files) have no bin.
+                    if x.is_finite() {
+                        acc[((x - min) / width).floor().clamp(0.0, 255.0) as usize] += 1;
+                    }
                 }
                 acc
             },
@@ -180,6 +178,32 @@ fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
                 a
             },
         )
+}
+
+/// Smallest and largest finite value ((0, 0) when there is none): a NaN or
+/// an infinity in a float file would otherwise make the range, the
+/// histogram and every window computed from them meaningless.
+fn finite_range(volume: &AnyVolume) -> (f64, f64) {
+    let AnyVolume::F32(v) = volume else {
+        return volume.min_max();
+    };
+    let (lo, hi) = v
+        .data()
+        .par_iter()
+        .filter(|x| x.is_finite())
+        .fold(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |(l, h), &x| (l.min(x), h.max(x)),
+        )
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    if lo > hi {
+        (0.0, 0.0)
+    } else {
+        (f64::from(lo), f64::from(hi))
+    }
 }
 
 /// Little-endian bytes of voxels.
@@ -210,7 +234,7 @@ impl LoadedCell {
 
     /// Wrap a volume already in memory.
     pub fn from_volume(volume: AnyVolume) -> LoadedCell {
-        let (min, max) = volume.min_max();
+        let (min, max) = finite_range(&volume);
         let integer = !matches!(volume, AnyVolume::F32(_));
         let bin_width = if integer {
             ((max - min + 1.0) / 256.0).ceil().max(1.0)
@@ -341,5 +365,31 @@ mod tests {
         assert_eq!(c.counts[2], 1);
         assert_eq!(c.counts[197], 1);
         assert_eq!(c.counts.iter().sum::<u64>(), 4);
+    }
+
+    #[test]
+    fn float_range_and_histogram_skip_nan_and_infinities() {
+        let g = interslice_core::Geometry::new([6, 1, 1], [1.0; 3], Default::default()).unwrap();
+        let data = vec![f32::NAN, -2.0, f32::INFINITY, 0.5, 6.0, f32::NEG_INFINITY];
+        let c = LoadedCell::from_volume(AnyVolume::F32(Volume::from_vec(g.clone(), data).unwrap()));
+        assert_eq!((c.min, c.max, c.bin_width), (-2.0, 6.0, 8.0 / 256.0));
+        assert_eq!(c.counts.iter().sum::<u64>(), 3);
+        assert_eq!((c.counts[0], c.counts[80], c.counts[255]), (1, 1, 1));
+        let none = vec![f32::NAN; 6];
+        let c = LoadedCell::from_volume(AnyVolume::F32(Volume::from_vec(g, none).unwrap()));
+        assert_eq!((c.min, c.max), (0.0, 0.0));
+        assert_eq!(c.counts.iter().sum::<u64>(), 0);
+    }
+
+    #[test]
+    fn histogram_of_i16_spans_the_signed_range() {
+        let g = interslice_core::Geometry::new([4, 1, 1], [1.0; 3], Default::default()).unwrap();
+        let v = Volume::from_vec(g, vec![-1024i16, -1000, 40, 3071]).unwrap();
+        let c = LoadedCell::from_volume(AnyVolume::I16(v));
+        assert_eq!((c.min, c.max, c.bin_width), (-1024.0, 3071.0, 16.0));
+        assert_eq!(
+            (c.counts[0], c.counts[1], c.counts[66], c.counts[255]),
+            (1, 1, 1, 1)
+        );
     }
 }
