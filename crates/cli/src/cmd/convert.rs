@@ -18,7 +18,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Store the volume as labels: integer values 0..=65535, written as u8
     /// when the largest is at most 255, else u16 (fails on other values).
-    /// (Implied by a `.seg.nrrd` output.)
+    /// (Implied by a `.seg.nrrd` output, or an input that names its components.)
     #[arg(long)]
     pub labels: bool,
     /// With --labels: the components' names, comma-separated, valued 1, 2, …
@@ -39,12 +39,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Format::of_path(&args.input)?;
     let out_format = Format::of_path(&args.output)?;
     let to_seg_nrrd = segmentation::is_seg_nrrd(&args.output);
-    if args.labels || to_seg_nrrd || args.components.is_some() {
+    // A segmentation read with its component table is written with it.
+    let components = match args.components {
+        Some(c) => c,
+        None => segmentation::read_components(&args.input)?,
+    };
+    if args.labels || to_seg_nrrd || !components.is_empty() {
         let v = interslice_io::read_labels(&args.input)?;
-        let components = match args.components {
-            Some(c) => c,
-            None => segmentation::read_components(&args.input)?,
-        };
         if to_seg_nrrd || !components.is_empty() {
             for f in segmentation::write_segmentation(&args.output, &v, &components)?.iter().skip(1) {
                 println!("wrote {}", f.display());
