@@ -1,20 +1,39 @@
 //! Contours and drawn-empty slices.
+//!
+//! A contour id names one content forever: ids are AUTOINCREMENT (never
+//! reused) and a trigger refuses to update a contour row. A contour taken off
+//! its slice (deleted, replaced, cleared, undone) is first copied into the
+//! append-only `contour_archive`, so the change log and the audit log name
+//! contours by id instead of copying them, and undo puts them back from there.
 use super::cells::touch_status;
-use super::changes::record_change;
+use super::changes::{Delta, record_change};
 use super::users::user_from_row;
 use super::{Store, axis_str, json_err, parse_axis};
 use crate::model::*;
 use crate::{Result, StoreError, now_rfc3339};
 use interslice_core::Axis;
 use rusqlite::{OptionalExtension, Transaction, params};
-use serde::{Deserialize, Serialize};
 
-/// The state of one label on one slice, as kept for undo/redo.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-pub(super) struct SliceState {
-    pub(super) empty: bool,
-    pub(super) contours: Vec<StoredContour>,
+/// The five columns of a slice key as SQL parameters `?1..?5`, in the order
+/// of [`SLICE_WHERE`].
+macro_rules! slice_params {
+    ($key:expr) => {
+        params![
+            $key.cell,
+            $key.user_id,
+            $key.label,
+            axis_str($key.axis),
+            $key.index as i64
+        ]
+    };
 }
+
+/// The rows of one label on one slice of one user's tracing.
+const SLICE_WHERE: &str = "cell = ?1 AND user_id = ?2 AND label = ?3 AND axis = ?4 AND slice = ?5";
+
+/// The columns of a contour row, shared by `contours` and `contour_archive`.
+const ROW_COLUMNS: &str = "id, cell, user_id, label, axis, slice, points, pressure, times_ms, \
+     duration_ms, tool, client_id, created, updated";
 
 /// Check a user-supplied contour: enough finite points, matching per-point arrays.
 pub(crate) fn validate_contour(c: &NewContour) -> Result<()> {
@@ -110,6 +129,7 @@ fn contour_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<StoredContour> {
     })
 }
 
+/// The live contours of a slice, oldest first.
 fn slice_contours(tx: &Transaction<'_>, key: &SliceKey) -> Result<Vec<StoredContour>> {
     let sql = format!(
         "SELECT {CONTOUR_COLUMNS} FROM contours c JOIN users u ON u.id = c.user_id \
@@ -117,57 +137,32 @@ fn slice_contours(tx: &Transaction<'_>, key: &SliceKey) -> Result<Vec<StoredCont
          ORDER BY c.id"
     );
     let mut st = tx.prepare_cached(&sql)?;
-    let rows = st.query_map(
-        params![
-            key.cell,
-            key.user_id,
-            key.label,
-            axis_str(key.axis),
-            key.index as i64
-        ],
-        contour_from_row,
-    )?;
+    let rows = st.query_map(slice_params!(key), contour_from_row)?;
     Ok(rows.collect::<rusqlite::Result<Vec<_>>>()?)
 }
 
-pub(super) fn slice_state(tx: &Transaction<'_>, key: &SliceKey) -> Result<SliceState> {
-    let contours = slice_contours(tx, key)?;
-    let empty = tx
-        .prepare_cached(
-            "SELECT 1 FROM drawn_empty WHERE cell = ?1 AND user_id = ?2 AND label = ?3 \
-             AND axis = ?4 AND slice = ?5",
-        )?
-        .exists(params![
-            key.cell,
-            key.user_id,
-            key.label,
-            axis_str(key.axis),
-            key.index as i64
-        ])?;
-    Ok(SliceState { empty, contours })
+/// One live contour by id.
+fn contour_by_id(tx: &Transaction<'_>, id: i64) -> Result<Option<StoredContour>> {
+    let sql = format!(
+        "SELECT {CONTOUR_COLUMNS} FROM contours c JOIN users u ON u.id = c.user_id WHERE c.id = ?1"
+    );
+    Ok(tx
+        .prepare_cached(&sql)?
+        .query_row([id], contour_from_row)
+        .optional()?)
 }
 
-/// Overwrite the slice with `state`, keeping contour ids (ids are AUTOINCREMENT,
-/// so an id freed by a delete is never reused by another contour).
-pub(super) fn apply_state(tx: &Transaction<'_>, key: &SliceKey, state: &SliceState) -> Result<()> {
-    let k = params![
-        key.cell,
-        key.user_id,
-        key.label,
-        axis_str(key.axis),
-        key.index as i64
-    ];
-    tx.prepare_cached(
-        "DELETE FROM contours WHERE cell = ?1 AND user_id = ?2 AND label = ?3 AND axis = ?4 \
-         AND slice = ?5",
-    )?
-    .execute(k)?;
-    tx.prepare_cached(
-        "DELETE FROM drawn_empty WHERE cell = ?1 AND user_id = ?2 AND label = ?3 AND axis = ?4 \
-         AND slice = ?5",
-    )?
-    .execute(k)?;
-    if state.empty {
+/// Whether the slice is marked drawn-empty.
+fn is_empty(tx: &Transaction<'_>, key: &SliceKey) -> Result<bool> {
+    let sql = format!("SELECT 1 FROM drawn_empty WHERE {SLICE_WHERE}");
+    Ok(tx.prepare_cached(&sql)?.exists(slice_params!(key))?)
+}
+
+/// Set or clear the drawn-empty mark of a slice; returns whether it was set.
+pub(super) fn set_empty(tx: &Transaction<'_>, key: &SliceKey, empty: bool) -> Result<bool> {
+    let sql = format!("DELETE FROM drawn_empty WHERE {SLICE_WHERE}");
+    let was = tx.prepare_cached(&sql)?.execute(slice_params!(key))? > 0;
+    if empty {
         tx.prepare_cached(
             "INSERT INTO drawn_empty (cell, user_id, label, axis, slice, created) \
              VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
@@ -181,25 +176,33 @@ pub(super) fn apply_state(tx: &Transaction<'_>, key: &SliceKey, state: &SliceSta
             now_rfc3339()
         ])?;
     }
-    for c in &state.contours {
-        insert_contour_row(tx, key, Some(c.id), c)?;
-    }
-    Ok(())
+    Ok(was)
 }
 
-fn insert_contour_row(
-    tx: &Transaction<'_>,
-    key: &SliceKey,
-    id: Option<i64>,
-    c: &StoredContour,
-) -> Result<i64> {
+/// Archive and delete every live contour of a slice; returns their ids, ascending.
+fn clear_slice(tx: &Transaction<'_>, key: &SliceKey) -> Result<Vec<i64>> {
+    let sql = format!(
+        "INSERT OR IGNORE INTO contour_archive ({ROW_COLUMNS}) \
+         SELECT {ROW_COLUMNS} FROM contours WHERE {SLICE_WHERE}"
+    );
+    tx.prepare_cached(&sql)?.execute(slice_params!(key))?;
+    let sql = format!("DELETE FROM contours WHERE {SLICE_WHERE} RETURNING id");
+    let mut st = tx.prepare_cached(&sql)?;
+    let mut ids = st
+        .query_map(slice_params!(key), |r| r.get(0))?
+        .collect::<rusqlite::Result<Vec<i64>>>()?;
+    ids.sort_unstable();
+    Ok(ids)
+}
+
+/// Store a new contour on its slice; returns its id.
+fn insert_contour(tx: &Transaction<'_>, key: &SliceKey, c: &StoredContour) -> Result<i64> {
     let mut st = tx.prepare_cached(
-        "INSERT INTO contours (id, cell, user_id, label, axis, slice, points, pressure, \
+        "INSERT INTO contours (cell, user_id, label, axis, slice, points, pressure, \
          times_ms, duration_ms, tool, client_id, created, updated) \
-         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+         VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
     )?;
     st.execute(params![
-        id,
         key.cell,
         key.user_id,
         key.label,
@@ -219,6 +222,40 @@ fn insert_contour_row(
         c.updated,
     ])?;
     Ok(tx.last_insert_rowid())
+}
+
+/// Put archived contours back where they were, under their own ids (undo of
+/// a removal, redo of an addition).
+pub(super) fn restore_contours(tx: &Transaction<'_>, ids: &[i64]) -> Result<()> {
+    let sql = format!(
+        "INSERT INTO contours ({ROW_COLUMNS}) SELECT {ROW_COLUMNS} FROM contour_archive WHERE id = ?1"
+    );
+    let mut st = tx.prepare_cached(&sql)?;
+    for &id in ids {
+        if st.execute([id])? != 1 {
+            return Err(StoreError::Corrupt(format!(
+                "contour {id} is missing from the archive"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Archive and delete live contours by id (a delete, the undo of an
+/// addition, the redo of a removal). A contour archived before (removed,
+/// restored, removed again) keeps its one archived row.
+pub(super) fn remove_contours(tx: &Transaction<'_>, ids: &[i64]) -> Result<()> {
+    let sql = format!(
+        "INSERT OR IGNORE INTO contour_archive ({ROW_COLUMNS}) \
+         SELECT {ROW_COLUMNS} FROM contours WHERE id = ?1"
+    );
+    let mut archive = tx.prepare_cached(&sql)?;
+    let mut delete = tx.prepare_cached("DELETE FROM contours WHERE id = ?1")?;
+    for &id in ids {
+        archive.execute([id])?;
+        delete.execute([id])?;
+    }
+    Ok(())
 }
 
 fn stored_from_new(key: &SliceKey, c: NewContour, client_id: Option<String>) -> StoredContour {
@@ -277,9 +314,19 @@ impl Store {
 
     /// One contour by id.
     pub fn contour(&self, id: i64) -> Result<Option<StoredContour>> {
+        self.read(|tx| contour_by_id(tx, id))
+    }
+
+    /// A contour as it was stored under `id`, whether it is still on its slice
+    /// or was deleted or replaced since: the content that change-log and audit
+    /// entries refer to by id.
+    pub fn archived_contour(&self, id: i64) -> Result<Option<StoredContour>> {
         self.read(|tx| {
+            if let Some(c) = contour_by_id(tx, id)? {
+                return Ok(Some(c));
+            }
             let sql = format!(
-                "SELECT {CONTOUR_COLUMNS} FROM contours c JOIN users u ON u.id = c.user_id \
+                "SELECT {CONTOUR_COLUMNS} FROM contour_archive c JOIN users u ON u.id = c.user_id \
                  WHERE c.id = ?1"
             );
             Ok(tx
@@ -323,27 +370,17 @@ impl Store {
                     return Ok((existing, false));
                 }
             }
-            let before = slice_state(tx, key)?;
-            let mut stored = stored_from_new(key, contour, client_id);
-            tx.prepare_cached(
-                "DELETE FROM drawn_empty WHERE cell = ?1 AND user_id = ?2 AND label = ?3 \
-                 AND axis = ?4 AND slice = ?5",
-            )?
-            .execute(params![
-                key.cell,
-                key.user_id,
-                key.label,
-                axis_str(key.axis),
-                key.index as i64
-            ])?;
-            stored.id = insert_contour_row(tx, key, None, &stored)?;
-            let after = slice_state(tx, key)?;
+            let empty_before = set_empty(tx, key, false)?;
+            let id = insert_contour(tx, key, &stored_from_new(key, contour, client_id))?;
             touch_status(tx, &key.cell, key.user_id)?;
-            record_change(tx, key, "contour.add", &before, &after)?;
-            let created = after
-                .contours
-                .into_iter()
-                .find(|c| c.id == stored.id)
+            let delta = Delta {
+                added: vec![id],
+                removed: vec![],
+                empty_before,
+                empty_after: false,
+            };
+            record_change(tx, key, "contour.add", &delta)?;
+            let created = contour_by_id(tx, id)?
                 .ok_or_else(|| StoreError::Corrupt("inserted contour vanished".into()))?;
             Ok((created, true))
         })
@@ -362,20 +399,21 @@ impl Store {
         self.write(|tx| {
             Self::check_cell(tx, &key.cell)?;
             Self::check_label(tx, key.label)?;
-            let before = slice_state(tx, key)?;
-            let state = SliceState {
-                empty: false,
-                contours: vec![],
-            };
-            apply_state(tx, key, &state)?;
-            for c in contours {
-                let stored = stored_from_new(key, c, None);
-                insert_contour_row(tx, key, None, &stored)?;
-            }
-            let after = slice_state(tx, key)?;
+            let removed = clear_slice(tx, key)?;
+            let empty_before = set_empty(tx, key, false)?;
+            let added = contours
+                .into_iter()
+                .map(|c| insert_contour(tx, key, &stored_from_new(key, c, None)))
+                .collect::<Result<Vec<i64>>>()?;
             touch_status(tx, &key.cell, key.user_id)?;
-            record_change(tx, key, "slice.replace", &before, &after)?;
-            Ok(after.contours)
+            let delta = Delta {
+                added,
+                removed,
+                empty_before,
+                empty_after: false,
+            };
+            record_change(tx, key, "slice.replace", &delta)?;
+            slice_contours(tx, key)
         })
     }
 
@@ -411,11 +449,15 @@ impl Store {
                 axis: parse_axis(&axis)?,
                 index: slice as usize,
             };
-            let before = slice_state(tx, &key)?;
-            tx.prepare_cached("DELETE FROM contours WHERE id = ?1")?
-                .execute([id])?;
-            let after = slice_state(tx, &key)?;
-            record_change(tx, &key, "contour.delete", &before, &after)
+            remove_contours(tx, &[id])?;
+            let empty = is_empty(tx, &key)?;
+            let delta = Delta {
+                added: vec![],
+                removed: vec![id],
+                empty_before: empty,
+                empty_after: empty,
+            };
+            record_change(tx, &key, "contour.delete", &delta)
         })
     }
 
@@ -424,18 +466,16 @@ impl Store {
         self.write(|tx| {
             Self::check_cell(tx, &key.cell)?;
             Self::check_label(tx, key.label)?;
-            let before = slice_state(tx, key)?;
-            apply_state(
-                tx,
-                key,
-                &SliceState {
-                    empty: true,
-                    contours: vec![],
-                },
-            )?;
-            let after = slice_state(tx, key)?;
+            let removed = clear_slice(tx, key)?;
+            let empty_before = set_empty(tx, key, true)?;
             touch_status(tx, &key.cell, key.user_id)?;
-            record_change(tx, key, "slice.empty", &before, &after)
+            let delta = Delta {
+                added: vec![],
+                removed,
+                empty_before,
+                empty_after: true,
+            };
+            record_change(tx, key, "slice.empty", &delta)
         })
     }
 

@@ -27,6 +27,10 @@ mod results;
 mod segmentations;
 mod users;
 
+/// The size past which the WAL file is emptied by a TRUNCATE checkpoint (see
+/// `Checkpointer`); with one tick of writes on top it stays well under 64 MiB.
+const WAL_LIMIT: u64 = 32 << 20;
+
 /// The annotation database.
 ///
 /// One connection serialised by a mutex: SQLite allows one writer at a time
@@ -76,6 +80,11 @@ impl Store {
     /// Open (creating if needed) the database at `path`: WAL, foreign keys,
     /// migrations to the latest version.
     pub fn open(path: &Path) -> Result<Store> {
+        Self::open_with_wal_limit(path, WAL_LIMIT)
+    }
+
+    /// [`Store::open`] with another bound on the WAL file.
+    fn open_with_wal_limit(path: &Path, wal_limit: u64) -> Result<Store> {
         if let Some(parent) = path.parent()
             && !parent.as_os_str().is_empty()
         {
@@ -85,15 +94,15 @@ impl Store {
             })?;
         }
         let conn = Connection::open(path)?;
-        Self::init(conn, Some(path.to_path_buf()))
+        Self::init(conn, Some(path.to_path_buf()), wal_limit)
     }
 
     /// A private in-memory database (tests, throw-away runs).
     pub fn open_in_memory() -> Result<Store> {
-        Self::init(Connection::open_in_memory()?, None)
+        Self::init(Connection::open_in_memory()?, None, WAL_LIMIT)
     }
 
-    fn init(mut conn: Connection, path: Option<PathBuf>) -> Result<Store> {
+    fn init(mut conn: Connection, path: Option<PathBuf>, wal_limit: u64) -> Result<Store> {
         conn.busy_timeout(Duration::from_secs(10))?;
         // WAL: readers do not block the writer; NORMAL: a commit is durable against
         // a process crash (the WAL is written before COMMIT returns), fsync at checkpoints.
@@ -107,7 +116,9 @@ impl Store {
         let checkpointer = match &path {
             Some(p) => {
                 conn.pragma_update(None, "wal_autocheckpoint", 0)?;
-                Some(Checkpointer::start(p)?)
+                // SQLite truncates the WAL file to this size when it rewinds it.
+                conn.pragma_update(None, "journal_size_limit", wal_limit as i64)?;
+                Some(Checkpointer::start(p, wal_limit)?)
             }
             None => None,
         };
@@ -189,5 +200,7 @@ impl Store {
     }
 }
 
+#[cfg(test)]
+mod history_tests;
 #[cfg(test)]
 mod tests;
