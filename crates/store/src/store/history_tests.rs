@@ -117,6 +117,7 @@ fn bytes_per_write_do_not_grow_with_the_slice_or_its_history() {
     }
     per_write(&big, 20);
     let large = per_write(&big, 60);
+    eprintln!("bytes per write: {small} on a slice of 1 contour, {large} on one of 1000");
     assert!(
         small < 2048 && large <= small + small / 2 + 128,
         "a write on a slice of 1 contour took {small} bytes, on one of 1000 {large}"
