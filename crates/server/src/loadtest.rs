@@ -10,13 +10,19 @@
 //! contour in a model but not in the database is *lost*; a contour in one
 //! user's rows that another client's model holds is *crossed*; any other row
 //! nobody was told about is *unexpected*. A correct server has zero of each.
+//!
+//! With a preload ([`run_preloaded`]) every client first replaces one of its
+//! slices with that many contours and keeps tracing on it: the cost of a
+//! write must not depend on how much the slice holds. The report ends with
+//! the space the database takes (all pages, the `contours` table, the WAL).
 use crate::client::{Client, quantile};
 use crate::{Config, RunningServer};
 use anyhow::{Context as _, bail};
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
-use interslice_store::ContourQuery;
+use interslice_store::{ContourQuery, SpaceUsage};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
+use std::sync::{Arc, Barrier};
 use std::time::{Duration, Instant};
 
 /// How the load test runs.
@@ -86,6 +92,12 @@ pub struct LoadReport {
     pub error_samples: Vec<String>,
     /// `PRAGMA integrity_check` afterwards.
     pub integrity: String,
+    /// Contours preloaded per client.
+    pub preload: usize,
+    /// Contours stored at the end (all users).
+    pub live_contours: usize,
+    /// The space the database takes at the end.
+    pub space: SpaceUsage,
 }
 
 impl LoadReport {
@@ -138,7 +150,17 @@ impl std::fmt::Display for LoadReport {
         for e in &self.error_samples {
             writeln!(f, "  error: {e}")?;
         }
-        Ok(())
+        let mb = |b: u64| b as f64 / (1 << 20) as f64;
+        writeln!(
+            f,
+            "{} live contours ({} preloaded per client); database {:.1} MiB, contours table {:.2} MiB ({:.1}×), WAL {:.1} MiB",
+            self.live_contours,
+            self.preload,
+            mb(self.space.database_bytes),
+            mb(self.space.contours_bytes),
+            self.space.database_bytes as f64 / self.space.contours_bytes.max(1) as f64,
+            mb(self.space.wal_bytes)
+        )
     }
 }
 
@@ -217,14 +239,28 @@ fn ids_points(v: &serde_json::Value) -> Option<(i64, Vec<[f64; 2]>)> {
     Some((id, points))
 }
 
-fn trace(
-    base: &str,
+/// What one client does: sign in, preload its first slice, wait for every
+/// other client at `start`, then trace for `duration`.
+struct Plan {
     n: usize,
-    cell: &str,
-    slices: &[usize],
+    cell: String,
+    slices: Vec<usize>,
     size: usize,
-    deadline: Instant,
-) -> ClientResult {
+    preload: usize,
+    start: Arc<Barrier>,
+    duration: Duration,
+}
+
+fn trace(base: &str, plan: Plan) -> ClientResult {
+    let Plan {
+        n,
+        ref cell,
+        ref slices,
+        size,
+        preload,
+        ref start,
+        duration,
+    } = plan;
     let user = format!("tracer-{n:02}");
     let mut r = ClientResult {
         user: user.clone(),
@@ -243,19 +279,52 @@ fn trace(
         }
     };
     let mut client = Client::new(base);
-    match client.login(&user, None) {
-        Ok(a) if a.ok() => {}
+    let signed_in = match client.login(&user, None) {
+        Ok(a) if a.ok() => true,
         Ok(a) => {
             fail(&mut r, format!("login: {} {:?}", a.status, a.error()));
-            return r;
+            false
         }
         Err(e) => {
             fail(&mut r, format!("login: {e}"));
-            return r;
+            false
+        }
+    };
+    let room = (size as f64 - 6.0).max(1.0);
+    // The preloaded slice: label 1 on the first slice, never replaced.
+    let big = (1u16, slices[0]);
+    if signed_in && preload > 0 {
+        let cs: Vec<serde_json::Value> = (0..preload)
+            .map(|i| {
+                let x = 1.0 + (i % (room as usize * 4)) as f64 * 0.25;
+                serde_json::json!({"points": square(x, x, 2.0)})
+            })
+            .collect();
+        let answer = client.json(
+            "PUT",
+            &format!("/api/cells/{cell}/slices/z/{}/contours", big.1),
+            &serde_json::json!({"label": big.0, "contours": cs}),
+        );
+        let stored: Option<BTreeMap<i64, Vec<[f64; 2]>>> =
+            answer.ok().filter(|a| a.ok()).and_then(|a| {
+                a.json()
+                    .as_array()
+                    .map(|l| l.iter().filter_map(ids_points).collect())
+            });
+        match stored {
+            Some(s) if s.len() == preload => {
+                r.model.insert(big, s);
+            }
+            _ => fail(&mut r, "preload: not answered with the contours".into()),
         }
     }
+    let preloaded = r.model.get(&big).map_or(0, |m| m.len());
+    start.wait();
+    if !signed_in {
+        return r;
+    }
+    let deadline = Instant::now() + duration;
     let contours = format!("/api/cells/{cell}/contours");
-    let room = (size as f64 - 6.0).max(1.0);
     let mut seq: u64 = 0;
     while Instant::now() < deadline {
         seq += 1;
@@ -267,10 +336,15 @@ fn trace(
         let y0 = 1.0 + ((seq * 13) % (room as u64 * 4)) as f64 * 0.25;
         // A tracer keeps a few contours per label and slice: a slice that has
         // three gets one deleted instead of a fourth added.
-        let on_slice = r.model.get(&key).map_or(0, |m| m.len());
+        // The preloaded contours stay: they do not count, and the slice is
+        // added to instead of replaced.
+        let kept = if key == big { preloaded } else { 0 };
+        let on_slice = r.model.get(&key).map_or(0, |m| m.len()) - kept;
         let op = match seq % 10 {
             0..=5 if on_slice >= 3 => "delete",
             0..=5 => "add",
+            6 if key == big && on_slice >= 3 => "delete",
+            6 if key == big => "add",
             6 => "replace",
             7 if on_slice > 0 => "delete",
             7 => "add",
@@ -380,6 +454,15 @@ fn stats(op: &'static str, mut ms: Vec<f64>) -> OpStats {
 
 /// Run the load test on a fresh project in a temporary folder.
 pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
+    run_preloaded(cfg, 0)
+}
+
+/// [`run`], each client first replacing one of its slices with `preload`
+/// contours (at most 100000) that stay while it traces on.
+pub fn run_preloaded(cfg: &LoadConfig, preload: usize) -> anyhow::Result<LoadReport> {
+    if preload > 100_000 {
+        bail!("a preload of at most 100000 contours per client");
+    }
     if cfg.clients == 0 || cfg.cells == 0 || cfg.size < 16 {
         bail!("need at least one client, one cell and cells of 16³ or more");
     }
@@ -399,18 +482,27 @@ pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
         .collect();
     // Clients sharing a cell take interleaved slices, so no two share one.
     let per_cell = cfg.clients.div_ceil(cfg.cells);
-    let deadline = Instant::now() + cfg.duration;
-    let start = Instant::now();
+    let barrier = Arc::new(Barrier::new(cfg.clients + 1));
     let handles: Vec<_> = (0..cfg.clients)
         .map(|n| {
-            let cell = cell_ids[n % cell_ids.len()].clone();
-            let slot = n / cell_ids.len();
-            let slices: Vec<usize> = (0..cfg.size).filter(|s| s % per_cell == slot).collect();
+            let plan = Plan {
+                n,
+                cell: cell_ids[n % cell_ids.len()].clone(),
+                slices: (0..cfg.size)
+                    .filter(|s| s % per_cell == n / cell_ids.len())
+                    .collect(),
+                size: cfg.size,
+                preload,
+                start: barrier.clone(),
+                duration: cfg.duration,
+            };
             let base = base.clone();
-            let size = cfg.size;
-            std::thread::spawn(move || trace(&base, n, &cell, &slices, size, deadline))
+            std::thread::spawn(move || trace(&base, plan))
         })
         .collect();
+    // Tracing starts when every client has signed in and preloaded.
+    barrier.wait();
+    let start = Instant::now();
     let results: Vec<ClientResult> = handles
         .into_iter()
         .map(|h| h.join().map_err(|_| anyhow::anyhow!("a client panicked")))
@@ -427,7 +519,7 @@ pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
         }
     }
     let store = &server.state.store;
-    let (mut lost, mut crossed, mut unexpected) = (0, 0, 0);
+    let (mut lost, mut crossed, mut unexpected, mut live_contours) = (0, 0, 0, 0);
     for r in &results {
         let Some(user) = store.user(&r.user)? else {
             continue;
@@ -438,6 +530,7 @@ pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
             ..Default::default()
         })?;
         let mut stored: Model = Model::new();
+        live_contours += rows.len();
         for c in rows {
             if c.author != r.user {
                 crossed += 1;
@@ -467,6 +560,7 @@ pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
         }
     }
     let integrity = store.integrity_check()?;
+    let space = store.space()?;
 
     let mut all = Vec::new();
     let mut by_op: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
@@ -495,5 +589,8 @@ pub fn run(cfg: &LoadConfig) -> anyhow::Result<LoadReport> {
             .take(5)
             .collect(),
         integrity,
+        preload,
+        live_contours,
+        space,
     })
 }

@@ -138,7 +138,14 @@ CREATE TRIGGER audit_no_update BEFORE UPDATE ON audit
 CREATE TRIGGER audit_no_delete BEFORE DELETE ON audit
     BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 "#,
+    // 2: the change and audit logs record per-contour deltas instead of whole
+    // slices (see the file for how version-1 data is converted).
+    include_str!("migrations/002_change_deltas.sql"),
 ];
+
+/// The first version whose change and audit logs hold deltas: migrating a
+/// database from below it frees most of its pages (see [`migrate`]).
+const DELTA_HISTORY: i64 = 2;
 
 /// The schema version this program writes.
 pub fn latest_version() -> i64 {
@@ -146,6 +153,10 @@ pub fn latest_version() -> i64 {
 }
 
 /// Bring `conn` to the latest version; each migration runs in its own transaction.
+///
+/// Converting the whole-slice history of a version-1 database frees most of
+/// its pages; a VACUUM then returns them to the file system (once, after the
+/// migrations, outside their transactions as SQLite requires).
 pub fn migrate(conn: &mut Connection) -> Result<()> {
     let current: i64 = conn.query_row("PRAGMA user_version", [], |r| r.get(0))?;
     if current > latest_version() {
@@ -159,6 +170,9 @@ pub fn migrate(conn: &mut Connection) -> Result<()> {
         tx.execute_batch(sql)?;
         tx.pragma_update(None, "user_version", (n + 1) as i64)?;
         tx.commit()?;
+    }
+    if (1..DELTA_HISTORY).contains(&current) {
+        conn.execute_batch("VACUUM")?;
     }
     Ok(())
 }

@@ -300,3 +300,14 @@ pub struct Progress {
     /// Contours the user has on it.
     pub contours: u64,
 }
+
+/// The space a database takes on disk.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct SpaceUsage {
+    /// Pages of the database (its file size once the WAL is checkpointed).
+    pub database_bytes: u64,
+    /// Pages of the `contours` table alone (the live tracing).
+    pub contours_bytes: u64,
+    /// The write-ahead log file (0 in memory).
+    pub wal_bytes: u64,
+}

@@ -1,9 +1,10 @@
-//! `loadtest [--clients 20] [--duration 60] [--cells 4] [--size 64]`: many
-//! clients trace different cells and slices of a fresh project over loopback
-//! HTTP; prints requests/s and latencies, then checks the database for lost,
-//! crossed or unexpected writes (exit 1 if any, or on any error).
+//! `loadtest [--clients 20] [--duration 60] [--cells 4] [--size 64]
+//! [--preload 0]`: many clients trace different cells and slices of a fresh
+//! project over loopback HTTP; prints requests/s and latencies, then checks
+//! the database for lost, crossed or unexpected writes (exit 1 if any, or on
+//! any error) and prints the space it takes.
 use clap::Parser;
-use interslice_server::loadtest::{LoadConfig, run};
+use interslice_server::loadtest::{LoadConfig, run_preloaded};
 use std::time::Duration;
 
 /// Concurrency test of the tracing server.
@@ -22,6 +23,10 @@ struct Args {
     /// Voxels per side of each cell.
     #[arg(long, default_value_t = 64)]
     size: usize,
+    /// Contours each client first puts on one of its slices (which it then
+    /// keeps tracing on), at most 100000.
+    #[arg(long, default_value_t = 0)]
+    preload: usize,
 }
 
 fn main() -> anyhow::Result<()> {
@@ -36,10 +41,10 @@ fn main() -> anyhow::Result<()> {
         size: a.size,
     };
     eprintln!(
-        "loadtest: {} clients, {} cells of {}³, {:.0} s",
-        cfg.clients, cfg.cells, cfg.size, a.duration
+        "loadtest: {} clients, {} cells of {}³, {:.0} s, {} contours preloaded per client",
+        cfg.clients, cfg.cells, cfg.size, a.duration, a.preload
     );
-    let report = run(&cfg)?;
+    let report = run_preloaded(&cfg, a.preload)?;
     print!("{report}");
     if !report.clean() {
         anyhow::bail!("the database does not hold exactly the acknowledged writes");

@@ -1,7 +1,8 @@
 //! The project's components as the store's labels: a project that names its
 //! own components (a brain MRI project: "Tumour, Oedema") gets exactly those,
 //! not the cell-CT set the database starts with.
-use super::{Store, audit};
+use super::Store;
+use super::audit::audit;
 use crate::{Result, StoreError};
 use interslice_core::components::{Component, Components, parse_hex_color};
 use rusqlite::params;

@@ -1,5 +1,6 @@
 use super::*;
-use interslice_core::LengthUnit;
+use crate::model::*;
+use interslice_core::{Geometry, LengthUnit, Volume};
 
 fn store_with_cell() -> (Store, User) {
     let s = Store::open_in_memory().unwrap();
