@@ -138,6 +138,12 @@ CREATE TRIGGER audit_no_update BEFORE UPDATE ON audit
 CREATE TRIGGER audit_no_delete BEFORE DELETE ON audit
     BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 "#,
+    // 2: how a session was opened. A session opened by name alone (loopback)
+    // is refused by a server that requires passwords; sessions from before
+    // this column count as opened by name.
+    r#"
+ALTER TABLE sessions ADD COLUMN with_password INTEGER NOT NULL DEFAULT 0;
+"#,
 ];
 
 /// The schema version this program writes.
