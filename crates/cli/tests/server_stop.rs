@@ -12,8 +12,8 @@ const BIN: &str = env!("CARGO_BIN_EXE_interslice");
 #[test]
 fn sigterm_stops_the_server_while_a_request_computes() {
     let dir = tempfile::tempdir().unwrap();
-    // 128³ smoothed with σ = 20 voxels: minutes of work in a debug build.
-    interslice_server::loadtest::write_cells(dir.path(), 1, [128, 128, 128], false).unwrap();
+    // 192³ smoothed with σ = 20 voxels: many seconds of work in a test build.
+    interslice_server::loadtest::write_cells(dir.path(), 1, [192, 192, 192], false).unwrap();
     let mut child = Command::new(BIN)
         .arg("serve")
         .arg(dir.path())

@@ -184,10 +184,10 @@ fn numbers_and_names_are_bounded_with_the_range_in_the_message() {
     );
 }
 
-/// A 96³ cell smoothed with σ = 20 voxels: seconds of work in a debug build.
+/// A 160³ cell smoothed with σ = 20 voxels: seconds of work in a test build.
 fn slow_project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    interslice_server::loadtest::write_cells(dir.path(), 1, [96, 96, 96], false).unwrap();
+    interslice_server::loadtest::write_cells(dir.path(), 1, [160, 160, 160], false).unwrap();
     dir
 }
 
@@ -197,7 +197,7 @@ const SLOW: &str = r#"{"method": "otsu", "smooth": 7}"#;
 fn a_timed_out_request_is_a_json_408_and_its_work_stops() {
     let dir = slow_project();
     let mut cfg = config(dir.path());
-    cfg.timeout = Duration::from_millis(1500);
+    cfg.timeout = Duration::from_secs(1);
     let server = serve(cfg);
     let c = signed_in(&server, "alice");
     // Load the cell first, so that the timeout falls in the smoothing.
