@@ -112,6 +112,15 @@ async fn blocking<T: Send + 'static>(
     tokio::task::spawn_blocking(f).await?
 }
 
+/// Long work: on the blocking pool, stopped through its token when the
+/// request is gone or the server stops ([`crate::jobs`]).
+async fn job<T: Send + 'static>(
+    state: &SharedState,
+    f: impl FnOnce(&Cancel) -> Result<T, ApiError> + Send + 'static,
+) -> Result<T, ApiError> {
+    state.jobs.run(f).await
+}
+
 /// The interpolator called `name` (slice-wise or mesh), or the default.
 pub fn method_by_name(
     name: Option<&str>,
@@ -693,49 +702,47 @@ async fn interpolate(
     let method = method_by_name(body.method.as_deref())?;
     let c = state.cell(&cell).await?;
     let st = state.clone();
-    let answer = state
-        .jobs
-        .run(move |cancel| {
-            let g = c.volume.geometry().clone();
-            let (mask, drawn) = groundtruth::interpolate_label(
-                &st.store,
-                &g,
-                &cell,
-                me.id,
-                body.label,
-                axis,
-                method.as_ref(),
-                cancel,
-            )?;
-            let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
-            let result_id =
-                st.store
-                    .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?;
-            let (w, h) = mask.slice_shape(axis);
-            use rayon::prelude::*;
-            let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
-                .into_par_iter()
-                .map(|i| {
-                    let s = mask.slice(axis, i).expect("index in range");
-                    PreviewSlice {
-                        index: i,
-                        drawn: drawn.binary_search(&i).is_ok(),
-                        contours: interslice_core::trace::mask_polygons(&s, w, h),
-                    }
-                })
-                .collect();
-            Ok(InterpolateAnswer {
-                result_id,
-                method: method.name().to_string(),
-                label: body.label,
-                axis: axis.to_string(),
-                slices,
-                volume: voxels as f64 * g.voxel_volume(),
-                unit: format!("{}³", g.unit.symbol()),
-                voxels,
+    let answer = job(&state, move |cancel| {
+        let g = c.volume.geometry().clone();
+        let (mask, drawn) = groundtruth::interpolate_label(
+            &st.store,
+            &g,
+            &cell,
+            me.id,
+            body.label,
+            axis,
+            method.as_ref(),
+            cancel,
+        )?;
+        let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
+        let result_id =
+            st.store
+                .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?;
+        let (w, h) = mask.slice_shape(axis);
+        use rayon::prelude::*;
+        let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
+            .into_par_iter()
+            .map(|i| {
+                let s = mask.slice(axis, i).expect("index in range");
+                PreviewSlice {
+                    index: i,
+                    drawn: drawn.binary_search(&i).is_ok(),
+                    contours: interslice_core::trace::mask_polygons(&s, w, h),
+                }
             })
+            .collect();
+        Ok(InterpolateAnswer {
+            result_id,
+            method: method.name().to_string(),
+            label: body.label,
+            axis: axis.to_string(),
+            slices,
+            volume: voxels as f64 * g.voxel_volume(),
+            unit: format!("{}³", g.unit.symbol()),
+            voxels,
         })
-        .await?;
+    })
+    .await?;
     Ok(Json(answer))
 }
 
@@ -988,38 +995,36 @@ async fn export(
     };
     let format = q.format.unwrap_or_else(|| "nii.gz".to_string());
     let st = state.clone();
-    let (bytes, name) = state
-        .jobs
-        .run(move |cancel| {
-            if let Some(id) = &q.result {
-                return result_bytes(&st, &me, &cell, id, &format);
-            }
-            if consensus {
-                let m = method_by_name(q.method.as_deref())?;
-                let g = c.volume.geometry();
-                return crate::consensus::export_bytes(
-                    &st.store,
-                    &target,
-                    &cell,
-                    g,
-                    &format,
-                    m.as_ref(),
-                    q.label,
-                    cancel,
-                );
-            }
-            export_bytes(
-                &st,
-                &cell,
-                c.volume.geometry(),
+    let (bytes, name) = job(&state, move |cancel| {
+        if let Some(id) = &q.result {
+            return result_bytes(&st, &me, &cell, id, &format);
+        }
+        if consensus {
+            let m = method_by_name(q.method.as_deref())?;
+            let g = c.volume.geometry();
+            return crate::consensus::export_bytes(
+                &st.store,
                 &target,
+                &cell,
+                g,
                 &format,
-                q.method.as_deref(),
+                m.as_ref(),
                 q.label,
                 cancel,
-            )
-        })
-        .await?;
+            );
+        }
+        export_bytes(
+            &st,
+            &cell,
+            c.volume.geometry(),
+            &target,
+            &format,
+            q.method.as_deref(),
+            q.label,
+            cancel,
+        )
+    })
+    .await?;
     let mut resp = bytes.into_response();
     let ct = if name.ends_with(".json") {
         "application/json"
@@ -1172,22 +1177,20 @@ async fn evaluate(
 ) -> Result<Response, ApiError> {
     let c = state.cell(&cell).await?;
     let st = state.clone();
-    let metrics = state
-        .jobs
-        .run(move |cancel| {
-            let g = c.volume.geometry();
-            let m = body.method.as_deref();
-            let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m, cancel)?;
-            let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m, cancel)?;
-            cancel.check()?;
-            let tol = body
-                .tolerance
-                .unwrap_or(interslice_core::metrics::DEFAULT_TOLERANCE);
-            Ok(interslice_core::metrics::evaluate_label(
-                &r, &t, body.label, tol,
-            )?)
-        })
-        .await?;
+    let metrics = job(&state, move |cancel| {
+        let g = c.volume.geometry();
+        let m = body.method.as_deref();
+        let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m, cancel)?;
+        let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m, cancel)?;
+        cancel.check()?;
+        let tol = body
+            .tolerance
+            .unwrap_or(interslice_core::metrics::DEFAULT_TOLERANCE);
+        Ok(interslice_core::metrics::evaluate_label(
+            &r, &t, body.label, tol,
+        )?)
+    })
+    .await?;
     Ok(Json(metrics).into_response())
 }
 
@@ -1377,36 +1380,34 @@ async fn add_segmentation(
     p.smooth_sigma = crate::limits::smooth(body.smooth.unwrap_or(0.0), c.volume.geometry())?;
     p.validate()?;
     let st = state.clone();
-    let info = state
-        .jobs
-        .run(move |cancel| {
-            let labels = interslice_core::segment::segment(&c.volume, &p, cancel)?;
-            let params = serde_json::json!({
-                "classes": p.classes, "smooth": p.smooth_sigma,
-                "largest_component": p.largest_component, "fill_holes": p.fill_holes,
-                "connectivity": p.connectivity.neighbours(),
-            });
-            let mut name = p.method.name().to_string();
-            if p.smooth_sigma > 0.0 {
-                name.push_str(&format!(" σ={}", p.smooth_sigma));
-            }
-            let meta = st.store.save_segmentation(
-                &cell,
-                &name,
-                p.method.name(),
-                &params,
-                &labels,
-                Some(me.id),
-            )?;
-            Ok(SegmentationInfo {
-                id: meta.id.to_string(),
-                name: meta.name,
-                method: meta.method,
-                params: meta.params,
-                created: meta.created,
-            })
+    let info = job(&state, move |cancel| {
+        let labels = interslice_core::segment::segment(&c.volume, &p, cancel)?;
+        let params = serde_json::json!({
+            "classes": p.classes, "smooth": p.smooth_sigma,
+            "largest_component": p.largest_component, "fill_holes": p.fill_holes,
+            "connectivity": p.connectivity.neighbours(),
+        });
+        let mut name = p.method.name().to_string();
+        if p.smooth_sigma > 0.0 {
+            name.push_str(&format!(" σ={}", p.smooth_sigma));
+        }
+        let meta = st.store.save_segmentation(
+            &cell,
+            &name,
+            p.method.name(),
+            &params,
+            &labels,
+            Some(me.id),
+        )?;
+        Ok(SegmentationInfo {
+            id: meta.id.to_string(),
+            name: meta.name,
+            method: meta.method,
+            params: meta.params,
+            created: meta.created,
         })
-        .await?;
+    })
+    .await?;
     Ok((StatusCode::CREATED, Json(info)).into_response())
 }
 
@@ -1431,37 +1432,35 @@ async fn overlay(
     let c = state.cell(&cell).await?;
     check_slice(c.volume.geometry(), axis, index)?;
     let st = state.clone();
-    let (bytes, w, h) = state
-        .jobs
-        .run(move |cancel| {
-            let g = c.volume.geometry();
-            let reference = Source {
-                user: Some(q.reference_user.clone().unwrap_or_else(|| me.name.clone())),
-                ..Default::default()
-            };
-            let test = Source {
-                segmentation: Some(q.segmentation.clone()),
-                ..Default::default()
-            };
-            let method = q.method.as_deref();
-            let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, method, cancel)?;
-            let seg = resolve_source(&st, &me, &cell, g, &test, q.label, None, cancel)?;
-            let a = gt.slice(axis, index)?;
-            let b = seg.slice(axis, index)?;
-            let bytes: Vec<u8> = a
-                .iter()
-                .zip(&b)
-                .map(|(&x, &y)| match (x == q.label, y == q.label) {
-                    (false, false) => 0,
-                    (true, true) => 1,
-                    (false, true) => 2,
-                    (true, false) => 3,
-                })
-                .collect();
-            let (w, h) = gt.slice_shape(axis);
-            Ok((bytes, w, h))
-        })
-        .await?;
+    let (bytes, w, h) = job(&state, move |cancel| {
+        let g = c.volume.geometry();
+        let reference = Source {
+            user: Some(q.reference_user.clone().unwrap_or_else(|| me.name.clone())),
+            ..Default::default()
+        };
+        let test = Source {
+            segmentation: Some(q.segmentation.clone()),
+            ..Default::default()
+        };
+        let method = q.method.as_deref();
+        let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, method, cancel)?;
+        let seg = resolve_source(&st, &me, &cell, g, &test, q.label, None, cancel)?;
+        let a = gt.slice(axis, index)?;
+        let b = seg.slice(axis, index)?;
+        let bytes: Vec<u8> = a
+            .iter()
+            .zip(&b)
+            .map(|(&x, &y)| match (x == q.label, y == q.label) {
+                (false, false) => 0,
+                (true, true) => 1,
+                (false, true) => 2,
+                (true, false) => 3,
+            })
+            .collect();
+        let (w, h) = gt.slice_shape(axis);
+        Ok((bytes, w, h))
+    })
+    .await?;
     let mut resp = bytes.into_response();
     let hd = resp.headers_mut();
     hd.insert(
