@@ -72,6 +72,13 @@ fn sigterm_stops_the_server_while_a_request_computes() {
         panic!("the server did not stop within 15 s of SIGTERM");
     };
     assert!(status.success(), "{status:?}");
-    eprintln!("stopped {:.2} s after SIGTERM", sent.elapsed().as_secs_f64());
-    drop(s);
+    eprintln!(
+        "stopped {:.2} s after SIGTERM",
+        sent.elapsed().as_secs_f64()
+    );
+    // The computation was stopped, not finished: its request got the 503.
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let mut answer = String::new();
+    let _ = std::io::Read::read_to_string(&mut s, &mut answer);
+    assert!(answer.starts_with("HTTP/1.1 503"), "{answer}");
 }
