@@ -261,3 +261,40 @@ fn unknown_method_and_missing_input_are_errors() {
     assert!(e.contains("nope.nii.gz"), "{e}");
     assert!(!out.exists());
 }
+
+/// An intensity image read as labels has a label per grey value: more than
+/// `--max-labels` (255) is a one-line error that says so, before any work;
+/// `--max-labels` raises the bound.
+#[test]
+fn an_intensity_image_is_refused_unless_max_labels_allows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = Geometry::new([20, 20, 4], [1.0; 3], LengthUnit::Micrometre).unwrap();
+    let mut v: LabelVolume = Volume::zeros(g);
+    for k in [0, 3] {
+        for j in 0..20 {
+            for i in 0..20 {
+                v.set(i, j, k, 1 + (i + 20 * j) as u16);
+            }
+        }
+    }
+    let (input, out) = (dir.path().join("grey.nrrd"), dir.path().join("out.nrrd"));
+    write(&input, &v);
+    let run = |extra: &[&str]| {
+        let mut c = bin();
+        c.arg("interpolate")
+            .arg(&input)
+            .arg("--out")
+            .arg(&out)
+            .args(["--method", "linear"])
+            .args(extra);
+        c.output().unwrap()
+    };
+    let err = fails(run(&[]));
+    assert!(
+        err.contains("400 labels") && err.contains("--max-labels"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    ok(run(&["--max-labels", "400"]));
+    assert!(out.exists());
+}

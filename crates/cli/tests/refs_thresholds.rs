@@ -391,8 +391,13 @@ fn segment_labels_match_reference_counts() {
                             classes,
                             ..Default::default()
                         };
-                        let (ts, _) = interslice_core::segment::thresholds(v, &p).unwrap();
-                        let labels = segment(v, &p).unwrap();
+                        let (ts, _) = interslice_core::segment::thresholds(
+                            v,
+                            &p,
+                            &interslice_core::Cancel::new(),
+                        )
+                        .unwrap();
+                        let labels = segment(v, &p, &interslice_core::Cancel::new()).unwrap();
                         for (i, t) in ts.iter().enumerate() {
                             let want = count_above(v, *t).0;
                             let got: u64 =
@@ -418,7 +423,7 @@ fn segment_labels_match_reference_counts() {
                 classes,
                 ..Default::default()
             };
-            let seg = segment(v, &p);
+            let seg = segment(v, &p, &interslice_core::Cancel::new());
             if m.get("counts").is_none() {
                 // Skipped or an error in the reference: segment must refuse.
                 if seg.is_ok() && m.get("error").is_some() {

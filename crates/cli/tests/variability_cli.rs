@@ -155,6 +155,7 @@ fn simulated_campaign_report() {
         "nii.gz",
         method.as_ref(),
         None,
+        &interslice_core::Cancel::new(),
     )
     .unwrap();
     assert_eq!(name, "cell_001-consensus.nii.gz");
@@ -173,6 +174,7 @@ fn simulated_campaign_report() {
         "nii.gz",
         method.as_ref(),
         None,
+        &interslice_core::Cancel::new(),
     )
     .unwrap_err();
     assert_eq!(e.status.as_u16(), 403);

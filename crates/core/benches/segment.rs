@@ -52,7 +52,16 @@ fn benches(c: &mut Criterion) {
     drop(v512);
     let v256 = volume(256);
     g.bench_function("segment_otsu_u16_256", |b| {
-        b.iter(|| black_box(segment(&v256, &SegmentParams::default()).unwrap()))
+        b.iter(|| {
+            black_box(
+                segment(
+                    &v256,
+                    &SegmentParams::default(),
+                    &interslice_core::Cancel::new(),
+                )
+                .unwrap(),
+            )
+        })
     });
     let truth = match &v256 {
         AnyVolume::U16(x) => x.map(|a| a > 16000),
@@ -66,7 +75,16 @@ fn benches(c: &mut Criterion) {
     ];
     let refs: Vec<&Mask> = raters.iter().collect();
     g.bench_function("staple_3_raters_256", |b| {
-        b.iter(|| black_box(staple(&refs, StapleParams::default()).unwrap()))
+        b.iter(|| {
+            black_box(
+                staple(
+                    &refs,
+                    StapleParams::default(),
+                    &interslice_core::Cancel::new(),
+                )
+                .unwrap(),
+            )
+        })
     });
     g.finish();
 }

@@ -30,6 +30,9 @@ pub enum CoreError {
         /// Number of slices along the axis.
         len: usize,
     },
+    /// The computation was stopped through its [`crate::Cancel`] token.
+    #[error("the computation was cancelled")]
+    Cancelled,
     /// Any other invalid input, with a message.
     #[error("{0}")]
     Invalid(String),

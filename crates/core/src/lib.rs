@@ -6,6 +6,7 @@
 //! `index = i + nx * (j + ny * k)`.
 #![deny(missing_docs)]
 
+pub mod cancel;
 pub mod contour;
 pub mod components;
 pub mod contour_file;
@@ -24,6 +25,7 @@ pub mod threshold;
 pub mod trace;
 pub mod volume;
 
+pub use cancel::Cancel;
 pub use contour::Contour;
 pub use error::CoreError;
 pub use geometry::{Geometry, LengthUnit};

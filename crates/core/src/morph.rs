@@ -8,7 +8,7 @@
 //! and touches every voxel once. Written here because no maintained crate
 //! labels 3D masks in this storage order with anisotropy-aware smoothing;
 //! the algorithms are classic (Rosenfeld & Pfaltz two-pass labelling on runs).
-use crate::{Axis, CoreError, Geometry, Mask, Volume, Voxel};
+use crate::{Axis, Cancel, CoreError, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
 /// Which neighbours touch.
@@ -305,7 +305,13 @@ pub fn fill_holes_per_slice(mask: &Mask, axis: Axis) -> Mask {
 /// kernels truncated at 4 σ and normalised, borders mirrored (`d c b a | a b c d`,
 /// scipy's default). An axis whose σ is below 0.1 voxel is left alone. The
 /// result is f32; memory is one f32 copy of the volume plus one slab per thread.
-pub fn gaussian_smooth<T: Voxel>(v: &Volume<T>, sigma: f64) -> Result<Volume<f32>, CoreError> {
+/// `cancel` is checked before every plane of every pass (a large σ on a large
+/// volume takes minutes).
+pub fn gaussian_smooth<T: Voxel>(
+    v: &Volume<T>,
+    sigma: f64,
+    cancel: &Cancel,
+) -> Result<Volume<f32>, CoreError> {
     if !(sigma.is_finite() && sigma >= 0.0) {
         return Err(CoreError::Invalid(format!(
             "smoothing sigma must be a finite number >= 0, not {sigma}"
@@ -321,6 +327,9 @@ pub fn gaussian_smooth<T: Voxel>(v: &Volume<T>, sigma: f64) -> Result<Volume<f32
     let kz = &kernels[2];
     let rz = kz.len() / 2;
     out.par_chunks_mut(plane).enumerate().for_each(|(k, dst)| {
+        if cancel.is_cancelled() {
+            return;
+        }
         for (t, &w) in kz.iter().enumerate() {
             let kk = mirror(k as i64 + t as i64 - rz as i64, nz);
             let s = &src[kk * plane..(kk + 1) * plane];
@@ -329,12 +338,16 @@ pub fn gaussian_smooth<T: Voxel>(v: &Volume<T>, sigma: f64) -> Result<Volume<f32
             }
         }
     });
+    cancel.check()?;
     // y and x passes in place, slab by slab.
     let (ky, kx) = (&kernels[1], &kernels[0]);
     let (ry, rx) = (ky.len() / 2, kx.len() / 2);
     out.par_chunks_mut(plane).for_each_init(
         || (vec![0f32; plane], vec![0f32; nx]),
         |(scratch, row), slab| {
+            if cancel.is_cancelled() {
+                return;
+            }
             if ky.len() > 1 {
                 scratch.copy_from_slice(slab);
                 slab.fill(0.0);
@@ -363,6 +376,7 @@ pub fn gaussian_smooth<T: Voxel>(v: &Volume<T>, sigma: f64) -> Result<Volume<f32
             }
         },
     );
+    cancel.check()?;
     Volume::from_vec(g, out)
 }
 
@@ -587,7 +601,7 @@ mod tests {
     fn smoothing_preserves_constants_and_mass() {
         let g = Geometry::new([9, 8, 7], [0.5, 1.0, 2.0], LengthUnit::Micrometre).unwrap();
         let c = Volume::<u16>::filled(g.clone(), 300);
-        let s = gaussian_smooth(&c, 1.5).unwrap();
+        let s = gaussian_smooth(&c, 1.5, &Cancel::new()).unwrap();
         assert!(s.data().iter().all(|&x| (x - 300.0).abs() < 1e-3));
         // An impulse far from the borders spreads with unit total weight,
         // symmetric about its voxel, wider along x (finer spacing).
@@ -595,12 +609,12 @@ mod tests {
             Geometry::new([21, 21, 21], [0.5, 1.0, 1.0], LengthUnit::Micrometre).unwrap(),
         );
         imp.set(10, 10, 10, 1000.0);
-        let s = gaussian_smooth(&imp, 1.0).unwrap();
+        let s = gaussian_smooth(&imp, 1.0, &Cancel::new()).unwrap();
         let total: f32 = s.data().iter().sum();
         assert!((total - 1000.0).abs() < 0.5, "{total}");
         assert!((s.get(9, 10, 10) - s.get(11, 10, 10)).abs() < 1e-4);
         assert!(s.get(11, 10, 10) > s.get(10, 11, 10));
-        assert!(gaussian_smooth(&imp, -1.0).is_err());
+        assert!(gaussian_smooth(&imp, -1.0, &Cancel::new()).is_err());
         assert_eq!(mirror(-1, 4), 0);
         assert_eq!(mirror(4, 4), 3);
         assert_eq!(mirror(9, 4), 1);

@@ -13,7 +13,7 @@
 //!    is painted `l` where it is lower, so inner structures stay inside).
 use crate::morph::{self, Connectivity};
 use crate::threshold::{self, Binning, Histogram, RosinEnd, ThresholdError};
-use crate::{AnyVolume, CoreError, LabelVolume, Volume, Voxel};
+use crate::{AnyVolume, Cancel, CoreError, LabelVolume, Volume, Voxel};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -173,17 +173,26 @@ fn err(e: ThresholdError) -> CoreError {
     CoreError::Invalid(e.to_string())
 }
 
-/// Segment `v` with `p` into a label volume (see the module docs).
-pub fn segment(v: &AnyVolume, p: &SegmentParams) -> Result<LabelVolume, CoreError> {
-    Ok(segment_detailed(v, p)?.labels)
+/// Segment `v` with `p` into a label volume (see the module docs); stops
+/// with [`CoreError::Cancelled`] once `cancel` is set.
+pub fn segment(
+    v: &AnyVolume,
+    p: &SegmentParams,
+    cancel: &Cancel,
+) -> Result<LabelVolume, CoreError> {
+    Ok(segment_detailed(v, p, cancel)?.labels)
 }
 
 /// The thresholds `p` gives on `v` (after smoothing when asked), without labelling.
-pub fn thresholds(v: &AnyVolume, p: &SegmentParams) -> Result<(Vec<f64>, Binning), CoreError> {
+pub fn thresholds(
+    v: &AnyVolume,
+    p: &SegmentParams,
+    cancel: &Cancel,
+) -> Result<(Vec<f64>, Binning), CoreError> {
     p.validate()?;
     let smoothed;
     let v = if p.smooth_sigma > 0.0 {
-        smoothed = smooth_same_type(v, p.smooth_sigma)?;
+        smoothed = smooth_same_type(v, p.smooth_sigma, cancel)?;
         &smoothed
     } else {
         v
@@ -223,7 +232,7 @@ fn thresholds_of(v: &AnyVolume, p: &SegmentParams) -> Result<(Vec<f64>, Binning)
 }
 
 /// Smooth and round back to the volume's own type (f32 stays f32).
-fn smooth_same_type(v: &AnyVolume, sigma: f64) -> Result<AnyVolume, CoreError> {
+fn smooth_same_type(v: &AnyVolume, sigma: f64, cancel: &Cancel) -> Result<AnyVolume, CoreError> {
     fn back<T: Voxel>(
         s: Volume<f32>,
         lo: f32,
@@ -233,28 +242,34 @@ fn smooth_same_type(v: &AnyVolume, sigma: f64) -> Result<AnyVolume, CoreError> {
         s.map(|x| cast(x.round().clamp(lo, hi)))
     }
     Ok(match v {
-        AnyVolume::U8(x) => {
-            AnyVolume::U8(back(morph::gaussian_smooth(x, sigma)?, 0.0, 255.0, |f| {
-                f as u8
-            }))
-        }
-        AnyVolume::U16(x) => {
-            AnyVolume::U16(back(morph::gaussian_smooth(x, sigma)?, 0.0, 65535.0, |f| {
-                f as u16
-            }))
-        }
+        AnyVolume::U8(x) => AnyVolume::U8(back(
+            morph::gaussian_smooth(x, sigma, cancel)?,
+            0.0,
+            255.0,
+            |f| f as u8,
+        )),
+        AnyVolume::U16(x) => AnyVolume::U16(back(
+            morph::gaussian_smooth(x, sigma, cancel)?,
+            0.0,
+            65535.0,
+            |f| f as u16,
+        )),
         AnyVolume::I16(x) => AnyVolume::I16(back(
-            morph::gaussian_smooth(x, sigma)?,
+            morph::gaussian_smooth(x, sigma, cancel)?,
             -32768.0,
             32767.0,
             |f| f as i16,
         )),
-        AnyVolume::F32(x) => AnyVolume::F32(morph::gaussian_smooth(x, sigma)?),
+        AnyVolume::F32(x) => AnyVolume::F32(morph::gaussian_smooth(x, sigma, cancel)?),
     })
 }
 
 /// Segment `v` with `p`, returning the labels with the thresholds used.
-pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation, CoreError> {
+pub fn segment_detailed(
+    v: &AnyVolume,
+    p: &SegmentParams,
+    cancel: &Cancel,
+) -> Result<Segmentation, CoreError> {
     p.validate()?;
     if let AnyVolume::F32(f) = v
         && f.data().par_iter().any(|x| !x.is_finite())
@@ -263,11 +278,12 @@ pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation
     }
     let smoothed;
     let v = if p.smooth_sigma > 0.0 {
-        smoothed = smooth_same_type(v, p.smooth_sigma)?;
+        smoothed = smooth_same_type(v, p.smooth_sigma, cancel)?;
         &smoothed
     } else {
         v
     };
+    cancel.check()?;
     let (thresholds, binning) = thresholds_of(v, p)?;
     let classify = |x: f64| thresholds.iter().filter(|&&t| x > t).count() as u16;
     let mut labels: LabelVolume = match v {
@@ -277,6 +293,7 @@ pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation
         AnyVolume::F32(x) => x.map(|a| classify(a as f64)),
     };
     if p.largest_component {
+        cancel.check()?;
         let keep = morph::largest_component(&labels.map(|l| l > 0), p.connectivity);
         labels
             .data_mut()
@@ -290,6 +307,7 @@ pub fn segment_detailed(v: &AnyVolume, p: &SegmentParams) -> Result<Segmentation
     }
     if p.fill_holes {
         for l in 1..p.classes as u16 {
+            cancel.check()?;
             let filled = morph::fill_holes(&labels.map(|x| x >= l), Connectivity::Face);
             labels
                 .data_mut()
@@ -351,7 +369,7 @@ mod tests {
     #[test]
     fn otsu_then_clean_up() {
         let v = ball();
-        let plain = segment_detailed(&v, &SegmentParams::default()).unwrap();
+        let plain = segment_detailed(&v, &SegmentParams::default(), &Cancel::new()).unwrap();
         assert_eq!(plain.thresholds.len(), 1);
         let t = plain.thresholds[0];
         assert!((40.0..200.0).contains(&t), "{t}");
@@ -363,6 +381,7 @@ mod tests {
                 fill_holes: true,
                 ..Default::default()
             },
+            &Cancel::new(),
         )
         .unwrap();
         // The stray voxel is gone and the cavity is filled.
@@ -384,7 +403,7 @@ mod tests {
             classes: 3,
             ..Default::default()
         };
-        let s = segment_detailed(&v, &p).unwrap();
+        let s = segment_detailed(&v, &p, &Cancel::new()).unwrap();
         assert_eq!(s.thresholds.len(), 2);
         assert_eq!(s.labels.get(12, 12, 12), 1); // cavity (40) above the background
         assert_eq!(s.labels.get(12, 12, 5), 2); // shell
@@ -395,6 +414,7 @@ mod tests {
                 classes: 3,
                 ..Default::default()
             },
+            &Cancel::new(),
         )
         .unwrap();
         assert_eq!(k.get(12, 12, 5), 2);
@@ -404,7 +424,8 @@ mod tests {
                 &SegmentParams {
                     classes: 3,
                     ..Default::default()
-                }
+                },
+                &Cancel::new(),
             )
             .is_err()
         );
@@ -415,7 +436,8 @@ mod tests {
                     method: SegmentMethod::KMeans,
                     classes: 7,
                     ..Default::default()
-                }
+                },
+                &Cancel::new(),
             )
             .is_err()
         );
@@ -425,7 +447,8 @@ mod tests {
                 &SegmentParams {
                     smooth_sigma: -1.0,
                     ..Default::default()
-                }
+                },
+                &Cancel::new(),
             )
             .is_err()
         );
@@ -436,7 +459,7 @@ mod tests {
         );
         let g = Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let flat = AnyVolume::U8(Volume::filled(g, 9));
-        let e = segment(&flat, &SegmentParams::default())
+        let e = segment(&flat, &SegmentParams::default(), &Cancel::new())
             .unwrap_err()
             .to_string();
         assert!(e.contains("only 1 distinct value"), "{e}");
@@ -451,11 +474,26 @@ mod tests {
                 smooth_sigma: 0.6,
                 ..Default::default()
             },
+            &Cancel::new(),
         )
         .unwrap();
         assert_eq!(s.binning, Binning::Native);
         // One bright voxel in a dark corner is smoothed below the threshold.
         assert_eq!(s.labels.get(0, 0, 0), 0);
         assert_eq!(s.labels.get(12, 12, 5), 1);
+    }
+
+    #[test]
+    fn a_cancelled_segmentation_stops_with_cancelled() {
+        let cancel = Cancel::new();
+        cancel.cancel();
+        let p = SegmentParams {
+            smooth_sigma: 2.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            segment_detailed(&ball(), &p, &cancel).unwrap_err(),
+            CoreError::Cancelled
+        );
     }
 }

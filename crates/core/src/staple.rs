@@ -22,7 +22,7 @@
 //! parallel pass paints the consensus. The result equals the voxel-wise
 //! iteration (sums are only regrouped). Written here because no Rust crate
 //! implements STAPLE.
-use crate::{CoreError, LabelVolume, Mask, Volume};
+use crate::{Cancel, CoreError, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
 
 /// Most raters STAPLE accepts (patterns are counted in a `2^R` table).
@@ -115,8 +115,13 @@ fn check(raters: &[&Mask]) -> Result<(), CoreError> {
     Ok(())
 }
 
-/// Binary STAPLE of `raters` (2..=20 masks on one grid).
-pub fn staple(raters: &[&Mask], params: StapleParams) -> Result<Staple, CoreError> {
+/// Binary STAPLE of `raters` (2..=20 masks on one grid); `cancel` is checked
+/// before every EM iteration.
+pub fn staple(
+    raters: &[&Mask],
+    params: StapleParams,
+    cancel: &Cancel,
+) -> Result<Staple, CoreError> {
     check(raters)?;
     let r = raters.len();
     let np = 1usize << r;
@@ -155,6 +160,7 @@ pub fn staple(raters: &[&Mask], params: StapleParams) -> Result<Staple, CoreErro
     let mut iterations = 0;
     let mut converged = false;
     for it in 0..params.max_iterations {
+        cancel.check()?;
         iterations = it + 1;
         // M-step.
         let sw: f64 = counts.iter().zip(&w).map(|(c, x)| c * x).sum();
@@ -232,6 +238,7 @@ pub fn majority_vote(raters: &[&Mask]) -> Result<Mask, CoreError> {
 pub fn staple_labels(
     raters: &[&LabelVolume],
     params: StapleParams,
+    cancel: &Cancel,
 ) -> Result<(LabelVolume, Vec<(u16, Staple)>), CoreError> {
     if raters.is_empty() {
         return Err(CoreError::Invalid(
@@ -249,7 +256,7 @@ pub fn staple_labels(
     for l in labels {
         let masks: Vec<Mask> = raters.iter().map(|r| r.mask_of(l)).collect();
         let refs: Vec<&Mask> = masks.iter().collect();
-        let s = staple(&refs, params)?;
+        let s = staple(&refs, params, cancel)?;
         out.data_mut()
             .par_iter_mut()
             .zip(s.consensus.data().par_iter())
@@ -316,7 +323,7 @@ mod tests {
             .map(|(s, &(p, q))| flip(&truth, p, q, 11 + s as u64))
             .collect();
         let refs: Vec<&Mask> = raters.iter().collect();
-        let s = staple(&refs, StapleParams::default()).unwrap();
+        let s = staple(&refs, StapleParams::default(), &Cancel::new()).unwrap();
         assert!(s.converged);
         for (j, &(p, q)) in pq.iter().enumerate() {
             assert!(
@@ -342,7 +349,7 @@ mod tests {
             flip(&truth, 0.70, 0.98, 3),
         ];
         let refs: Vec<&Mask> = raters.iter().collect();
-        let s = staple(&refs, StapleParams::default()).unwrap();
+        let s = staple(&refs, StapleParams::default(), &Cancel::new()).unwrap();
         let mv = majority_vote(&refs).unwrap();
         let (ds, dm) = (dice(&s.consensus, &truth), dice(&mv, &truth));
         assert!(ds > dm + 0.01, "STAPLE {ds} vs majority {dm}");
@@ -368,7 +375,7 @@ mod tests {
                 .map(|(j, &(p, q))| flip(&truth, p, q, seed * 31 + j as u64))
                 .collect();
             let refs: Vec<&Mask> = raters.iter().collect();
-            let s = staple(&refs, StapleParams::default()).unwrap();
+            let s = staple(&refs, StapleParams::default(), &Cancel::new()).unwrap();
             assert!(s.converged, "seed {seed}");
             for (j, &(p, q)) in pq.iter().enumerate() {
                 let (ep, eq) = ((s.sensitivity[j] - p).abs(), (s.specificity[j] - q).abs());
@@ -407,7 +414,7 @@ mod tests {
             flip(&nucleus, 0.75, 0.99, 23),
         ];
         let refs: Vec<&Mask> = copies.iter().collect();
-        let s = staple(&refs, StapleParams::default()).unwrap();
+        let s = staple(&refs, StapleParams::default(), &Cancel::new()).unwrap();
         let mv = majority_vote(&refs).unwrap();
         let (ds, dm) = (dice(&s.consensus, &nucleus), dice(&mv, &nucleus));
         eprintln!("phantom nucleus: STAPLE Dice {ds:.4}, majority vote Dice {dm:.4}");
@@ -418,13 +425,19 @@ mod tests {
     #[test]
     fn identical_raters_and_labels() {
         let truth = ellipsoid(16, [5.0, 4.0, 3.0]);
-        let s = staple(&[&truth, &truth, &truth], StapleParams::default()).unwrap();
+        let s = staple(
+            &[&truth, &truth, &truth],
+            StapleParams::default(),
+            &Cancel::new(),
+        )
+        .unwrap();
         assert_eq!(s.consensus, truth);
         assert!(s.sensitivity.iter().all(|&p| (p - 1.0).abs() < 1e-9));
         let lab = truth.map(|b| if b { 2u16 } else { 0 });
-        let (c, per) = staple_labels(&[&lab, &lab], StapleParams::default()).unwrap();
+        let (c, per) =
+            staple_labels(&[&lab, &lab], StapleParams::default(), &Cancel::new()).unwrap();
         assert_eq!(c, lab);
         assert_eq!(per.len(), 1);
-        assert!(staple(&[&truth], StapleParams::default()).is_err());
+        assert!(staple(&[&truth], StapleParams::default(), &Cancel::new()).is_err());
     }
 }

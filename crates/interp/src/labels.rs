@@ -65,8 +65,11 @@ pub fn interpolate_labels(
     Ok(out)
 }
 
-/// Labels present on the drawn slices, ascending.
-fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u16> {
+/// Labels present on the drawn slices, ascending (each is interpolated on
+/// its own, so their number is the cost: callers bound it before
+/// interpolating a volume that may be an intensity image). `drawn` must be
+/// valid indices along `axis`.
+pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u16> {
     let mut seen = vec![false; 65536];
     for &d in drawn {
         for v in sparse.slice(axis, d).expect("validated drawn index") {

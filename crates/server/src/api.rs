@@ -9,7 +9,7 @@ use axum::extract::State;
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{delete, get, post, put};
-use interslice_core::{AnyVolume, Axis, Geometry, LabelVolume};
+use interslice_core::{AnyVolume, Axis, Cancel, Geometry, LabelVolume};
 use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredContour, User};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -110,6 +110,15 @@ async fn blocking<T: Send + 'static>(
     f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,
 ) -> Result<T, ApiError> {
     tokio::task::spawn_blocking(f).await?
+}
+
+/// Long work: on the blocking pool, stopped through its token when the
+/// request is gone or the server stops ([`crate::jobs`]).
+async fn job<T: Send + 'static>(
+    state: &SharedState,
+    f: impl FnOnce(&Cancel) -> Result<T, ApiError> + Send + 'static,
+) -> Result<T, ApiError> {
+    state.jobs.run(f).await
 }
 
 /// The interpolator called `name` (slice-wise or mesh), or the default.
@@ -537,6 +546,7 @@ async fn replace_slice(
 ) -> Result<Json<Vec<StoredContour>>, ApiError> {
     let axis = parse_axis(&axis)?;
     let index = parse_index(&index)?;
+    crate::limits::slice_contours(body.contours.len())?;
     let c = state.cell(&cell).await?;
     check_slice(c.volume.geometry(), axis, index)?;
     let key = SliceKey {
@@ -692,7 +702,7 @@ async fn interpolate(
     let method = method_by_name(body.method.as_deref())?;
     let c = state.cell(&cell).await?;
     let st = state.clone();
-    let answer = blocking(move || {
+    let answer = job(&state, move |cancel| {
         let g = c.volume.geometry().clone();
         let (mask, drawn) = groundtruth::interpolate_label(
             &st.store,
@@ -702,6 +712,7 @@ async fn interpolate(
             body.label,
             axis,
             method.as_ref(),
+            cancel,
         )?;
         let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
         let result_id =
@@ -847,6 +858,7 @@ struct ExportQuery {
 }
 
 /// The bytes of an export: a label volume file or the contours JSON.
+#[allow(clippy::too_many_arguments)]
 pub fn export_bytes(
     state: &SharedState,
     cell: &str,
@@ -855,6 +867,7 @@ pub fn export_bytes(
     format: &str,
     method: Option<&str>,
     label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<(Vec<u8>, String), ApiError> {
     let base = format!("{cell}-{}", crate::cells::id_of_name(&user.name));
     if format == "contours" {
@@ -863,8 +876,15 @@ pub fn export_bytes(
     }
     let ext = volume_extension(format)?;
     let m = method_by_name(method)?;
-    let labels =
-        groundtruth::label_volume(&state.store, geometry, cell, user.id, m.as_ref(), label)?;
+    let labels = groundtruth::label_volume(
+        &state.store,
+        geometry,
+        cell,
+        user.id,
+        m.as_ref(),
+        label,
+        cancel,
+    )?;
     let name = format!("{base}.{ext}");
     let bytes = label_file_bytes(state, &labels, &name)?;
     Ok((bytes, name))
@@ -985,7 +1005,7 @@ async fn export(
     };
     let format = q.format.unwrap_or_else(|| "nii.gz".to_string());
     let st = state.clone();
-    let (bytes, name) = blocking(move || {
+    let (bytes, name) = job(&state, move |cancel| {
         if let Some(id) = &q.result {
             return result_bytes(&st, &me, &cell, id, &format);
         }
@@ -1000,6 +1020,7 @@ async fn export(
                 &format,
                 m.as_ref(),
                 q.label,
+                cancel,
             );
         }
         export_bytes(
@@ -1010,6 +1031,7 @@ async fn export(
             &format,
             q.method.as_deref(),
             q.label,
+            cancel,
         )
     })
     .await?;
@@ -1077,6 +1099,7 @@ fn as_label(mut v: LabelVolume, label: u16) -> LabelVolume {
     v
 }
 
+#[allow(clippy::too_many_arguments)]
 fn resolve_source(
     state: &SharedState,
     me: &User,
@@ -1085,6 +1108,7 @@ fn resolve_source(
     src: &Source,
     label: u16,
     method: Option<&str>,
+    cancel: &Cancel,
 ) -> Result<Arc<LabelVolume>, ApiError> {
     let given = [
         src.user.is_some(),
@@ -1113,6 +1137,7 @@ fn resolve_source(
                 cell,
                 m.as_ref(),
                 Some(label),
+                cancel,
             )?));
         }
         let target = reader_target(state, me, Some(u))?;
@@ -1123,6 +1148,7 @@ fn resolve_source(
             target.id,
             m.as_ref(),
             Some(label),
+            cancel,
         );
     }
     let v = if let Some(p) = &src.path {
@@ -1143,7 +1169,9 @@ fn resolve_source(
         }
         interslice_io::read_labels(&full)?
     } else {
-        load_segmentation(state, cell, src.segmentation.as_deref().unwrap_or_default())?
+        let id = src.segmentation.as_deref().unwrap_or_default();
+        crate::limits::segmentation_id(id)?;
+        load_segmentation(state, cell, id)?
     };
     v.geometry().ensure_same_grid(geometry).map_err(|e| {
         ApiError::bad_request(format!("the segmentation is not on the cell's grid: {e}"))
@@ -1159,11 +1187,12 @@ async fn evaluate(
 ) -> Result<Response, ApiError> {
     let c = state.cell(&cell).await?;
     let st = state.clone();
-    let metrics = blocking(move || {
+    let metrics = job(&state, move |cancel| {
         let g = c.volume.geometry();
         let m = body.method.as_deref();
-        let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m)?;
-        let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m)?;
+        let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m, cancel)?;
+        let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m, cancel)?;
+        cancel.check()?;
         let tol = body
             .tolerance
             .unwrap_or(interslice_core::metrics::DEFAULT_TOLERANCE);
@@ -1279,14 +1308,7 @@ async fn upload_segmentation(
     body: Result<axum::body::Bytes, axum::extract::rejection::BytesRejection>,
 ) -> Result<Response, ApiError> {
     let body = body.map_err(crate::error::body_rejection)?;
-    let rel = safe_relative_path(&q.name)?;
-    if rel.components().count() != 1 {
-        return Err(ApiError::bad_request(format!(
-            "name '{}' must be a file name, not a path",
-            q.name
-        )));
-    }
-    interslice_io::Format::of_path(&rel)?;
+    let rel = crate::limits::upload_name(&q.name)?;
     if body.is_empty() {
         return Err(ApiError::bad_request("the uploaded file is empty"));
     }
@@ -1359,17 +1381,17 @@ async fn add_segmentation(
     } else if body.method == "multi-otsu" {
         p.classes = 3;
     }
-    p.smooth_sigma = body.smooth.unwrap_or(0.0);
     p.largest_component = body.largest_component.unwrap_or(false);
     if let Some(n) = body.connectivity {
         p.connectivity = interslice_core::morph::Connectivity::parse(&n.to_string())?;
     }
     p.fill_holes = body.fill_holes.unwrap_or(false);
-    p.validate()?;
     let c = state.cell(&cell).await?;
+    p.smooth_sigma = crate::limits::smooth(body.smooth.unwrap_or(0.0), c.volume.geometry())?;
+    p.validate()?;
     let st = state.clone();
-    let info = blocking(move || {
-        let labels = interslice_core::segment::segment(&c.volume, &p)?;
+    let info = job(&state, move |cancel| {
+        let labels = interslice_core::segment::segment(&c.volume, &p, cancel)?;
         let params = serde_json::json!({
             "classes": p.classes, "smooth": p.smooth_sigma,
             "largest_component": p.largest_component, "fill_holes": p.fill_holes,
@@ -1420,7 +1442,7 @@ async fn overlay(
     let c = state.cell(&cell).await?;
     check_slice(c.volume.geometry(), axis, index)?;
     let st = state.clone();
-    let (bytes, w, h) = blocking(move || {
+    let (bytes, w, h) = job(&state, move |cancel| {
         let g = c.volume.geometry();
         let reference = Source {
             user: Some(q.reference_user.clone().unwrap_or_else(|| me.name.clone())),
@@ -1430,8 +1452,9 @@ async fn overlay(
             segmentation: Some(q.segmentation.clone()),
             ..Default::default()
         };
-        let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, q.method.as_deref())?;
-        let seg = resolve_source(&st, &me, &cell, g, &test, q.label, None)?;
+        let method = q.method.as_deref();
+        let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, method, cancel)?;
+        let seg = resolve_source(&st, &me, &cell, g, &test, q.label, None, cancel)?;
         let a = gt.slice(axis, index)?;
         let b = seg.slice(axis, index)?;
         let bytes: Vec<u8> = a
@@ -1472,13 +1495,19 @@ pub struct RatingBody {
     pub comment: String,
 }
 
+/// A cell's ratings: a rating and its comment belong to their author and the
+/// reviewers, so a tracer sees only their own.
 async fn list_ratings(
     State(state): State<SharedState>,
-    _a: Auth,
+    Auth(me): Auth,
     ApiPath(cell): ApiPath<String>,
 ) -> Result<Response, ApiError> {
     state.cell_path(&cell)?;
-    Ok(Json(state.store.ratings(Some(&cell))?).into_response())
+    let mut ratings = state.store.ratings(Some(&cell))?;
+    if me.role != interslice_store::Role::Reviewer {
+        ratings.retain(|r| r.user == me.name);
+    }
+    Ok(Json(ratings).into_response())
 }
 
 async fn add_rating(
@@ -1488,6 +1517,7 @@ async fn add_rating(
     ApiJson(body): ApiJson<RatingBody>,
 ) -> Result<Response, ApiError> {
     state.cell_path(&cell)?;
+    crate::limits::segmentation_id(&body.segmentation)?;
     let known = body.segmentation.starts_with("file:")
         && segmentation_files(&state, &cell)
             .iter()

@@ -37,7 +37,7 @@ impl FromRequestParts<SharedState> for Auth {
         if token.len() != 64 || !token.bytes().all(|b| b.is_ascii_hexdigit()) {
             return Err(ApiError::unauthorized("not signed in (POST /api/login)"));
         }
-        let user = state
+        let (user, with_password) = state
             .store
             .session_user(&token)?
             .ok_or_else(|| ApiError::unauthorized("session expired; sign in again"))?;
@@ -46,6 +46,13 @@ impl FromRequestParts<SharedState> for Auth {
         if state.auth_required && !user.has_password {
             return Err(ApiError::unauthorized(
                 "this account has no password; ask for one with `interslice user add`",
+            ));
+        }
+        // Nor can a session opened by name alone on a loopback run of the
+        // same project: a name is not a proof of who is asking.
+        if state.auth_required && !with_password {
+            return Err(ApiError::unauthorized(
+                "this session was opened without a password; sign in again",
             ));
         }
         Ok(Auth(user))
@@ -92,13 +99,14 @@ pub async fn login(
                 .password
                 .as_deref()
                 .ok_or_else(|| ApiError::unauthorized("this server requires a password"))?;
+            crate::limits::password(pw)?;
             Ok(st.store.verify_password(&body.name, pw)?)
         } else {
             Ok(st.store.ensure_user(&body.name)?)
         }
     })
     .await??;
-    let token = state.store.create_session(user.id)?;
+    let token = state.store.create_session(user.id, state.auth_required)?;
     let mut resp = axum::Json(serde_json::json!({"name": user.name, "role": user.role.as_str()}))
         .into_response();
     resp.headers_mut()

@@ -15,7 +15,7 @@
 use crate::error::ApiError;
 use crate::groundtruth::label_volume;
 use interslice_core::staple::{Staple, StapleParams, staple};
-use interslice_core::{Geometry, LabelVolume, Mask, Volume};
+use interslice_core::{Cancel, Geometry, LabelVolume, Mask, Volume};
 use interslice_interp::Interpolator;
 use interslice_store::{Role, Store, User};
 
@@ -59,6 +59,7 @@ pub fn rater_masks(
     cell: &str,
     method: &dyn Interpolator,
     only_label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<Vec<LabelRaters>, ApiError> {
     let mut out: Vec<LabelRaters> = Vec::new();
     for user in store.tracers_of(cell)? {
@@ -70,7 +71,7 @@ pub fn rater_masks(
             .collect();
         labels.dedup();
         for l in labels {
-            let v = label_volume(store, geometry, cell, user.id, method, Some(l))?;
+            let v = label_volume(store, geometry, cell, user.id, method, Some(l), cancel)?;
             let mask = v.mask_of(l);
             match out.iter_mut().find(|r| r.label == l) {
                 Some(r) => {
@@ -94,12 +95,13 @@ pub fn consensus_of(
     geometry: &Geometry,
     raters: &[LabelRaters],
     params: StapleParams,
+    cancel: &Cancel,
 ) -> Result<Consensus, ApiError> {
     let mut labels: LabelVolume = Volume::zeros(geometry.clone());
     let mut per_label = Vec::new();
     for r in raters.iter().filter(|r| r.masks.len() >= 2) {
         let refs: Vec<&Mask> = r.masks.iter().collect();
-        let s = staple(&refs, params)?;
+        let s = staple(&refs, params, cancel)?;
         for (o, &c) in labels.data_mut().iter_mut().zip(s.consensus.data()) {
             if c {
                 *o = r.label;
@@ -122,9 +124,10 @@ pub fn consensus(
     cell: &str,
     method: &dyn Interpolator,
     only_label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<Consensus, ApiError> {
-    let raters = rater_masks(store, geometry, cell, method, only_label)?;
-    let c = consensus_of(geometry, &raters, StapleParams::default())?;
+    let raters = rater_masks(store, geometry, cell, method, only_label, cancel)?;
+    let c = consensus_of(geometry, &raters, StapleParams::default(), cancel)?;
     if c.per_label.is_empty() {
         return Err(ApiError::not_found(format!(
             "no label of cell '{cell}' was traced by two users{}",
@@ -145,19 +148,21 @@ pub fn consensus_for(
     cell: &str,
     method: &dyn Interpolator,
     only_label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<LabelVolume, ApiError> {
     if me.role != Role::Reviewer {
         return Err(ApiError::forbidden(
             "only reviewers may read the consensus of everyone's tracings",
         ));
     }
-    Ok(consensus(store, geometry, cell, method, only_label)?.labels)
+    Ok(consensus(store, geometry, cell, method, only_label, cancel)?.labels)
 }
 
 /// The file of a `user=consensus` export: the consensus label volume in
 /// `format` (nii.gz, nii, nrrd, mha, tiff) and its file name
 /// `<cell>-consensus.<ext>`. Contours have no consensus (STAPLE works on
 /// volumes), so `format=contours` is a 400.
+#[allow(clippy::too_many_arguments)]
 pub fn export_bytes(
     store: &Store,
     me: &User,
@@ -166,6 +171,7 @@ pub fn export_bytes(
     format: &str,
     method: &dyn Interpolator,
     only_label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<(Vec<u8>, String), ApiError> {
     let ext = match format {
         "nii.gz" | "nii" | "nrrd" | "tiff" | "tif" | "mha" => format,
@@ -180,7 +186,7 @@ pub fn export_bytes(
             )));
         }
     };
-    let labels = consensus_for(store, me, geometry, cell, method, only_label)?;
+    let labels = consensus_for(store, me, geometry, cell, method, only_label, cancel)?;
     let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
     let name = format!("{cell}-consensus.{ext}");
     let path = dir.path().join(&name);

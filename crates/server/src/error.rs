@@ -76,6 +76,12 @@ impl From<interslice_core::CoreError> for ApiError {
             interslice_core::CoreError::SliceOutOfRange { .. } => {
                 ApiError::not_found(e.to_string())
             }
+            // Only a job whose request is gone or whose server is stopping
+            // is cancelled; whoever still listens learns it is not a bug.
+            interslice_core::CoreError::Cancelled => ApiError::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                "the request was stopped (the server is shutting down or the request timed out)",
+            ),
             _ => ApiError::bad_request(e.to_string()),
         }
     }
@@ -83,7 +89,12 @@ impl From<interslice_core::CoreError> for ApiError {
 
 impl From<interslice_interp::InterpError> for ApiError {
     fn from(e: interslice_interp::InterpError) -> ApiError {
-        ApiError::bad_request(e.to_string())
+        match e {
+            interslice_interp::InterpError::Core(c @ interslice_core::CoreError::Cancelled) => {
+                ApiError::from(c)
+            }
+            other => ApiError::bad_request(other.to_string()),
+        }
     }
 }
 
@@ -109,14 +120,40 @@ pub fn body_rejection(e: BytesRejection) -> ApiError {
     }
 }
 
-/// A JSON body parsed from the raw bytes, whatever the Content-Type: a body
-/// over the limit is 413, anything unparsable 400 with serde's one-line reason.
+/// A JSON body: the request must say `Content-Type: application/json` (else
+/// 415: a cross-site form or `text/plain` fetch cannot send that without the
+/// browser asking first), a body over the limit is 413, anything unparsable
+/// 400 with serde's one-line reason.
 pub struct ApiJson<T>(pub T);
+
+/// Whether a `Content-Type` value is JSON (`application/json`, any
+/// parameters, or an `application/*+json` type).
+fn is_json(value: &str) -> bool {
+    let essence = value
+        .split(';')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
+    essence == "application/json"
+        || essence.starts_with("application/") && essence.ends_with("+json")
+}
 
 impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     type Rejection = ApiError;
 
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
+        let json = req
+            .headers()
+            .get(axum::http::header::CONTENT_TYPE)
+            .and_then(|v| v.to_str().ok())
+            .is_some_and(is_json);
+        if !json {
+            return Err(ApiError::new(
+                StatusCode::UNSUPPORTED_MEDIA_TYPE,
+                "the body must be JSON sent with Content-Type: application/json",
+            ));
+        }
         let bytes = axum::body::Bytes::from_request(req, state)
             .await
             .map_err(body_rejection)?;

@@ -2,7 +2,7 @@
 //! and interpolated, one label at a time, then painted in ascending label
 //! order (an inner structure overwrites the one containing it).
 use crate::error::ApiError;
-use interslice_core::{Axis, Contour, Geometry, LabelVolume, Mask, SliceRef, Volume};
+use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, SliceRef, Volume};
 use interslice_interp::{Interpolator, SparseMask};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::VecDeque;
@@ -54,7 +54,9 @@ pub fn sparse_mask(
     Ok((mask, drawn))
 }
 
-/// Interpolate one label of one user along one axis.
+/// Interpolate one label of one user along one axis; `cancel` is checked
+/// before and after the method runs (one label is the unit of work).
+#[allow(clippy::too_many_arguments)]
 pub fn interpolate_label(
     store: &Store,
     geometry: &Geometry,
@@ -63,7 +65,9 @@ pub fn interpolate_label(
     label: u16,
     axis: Axis,
     method: &dyn Interpolator,
+    cancel: &Cancel,
 ) -> Result<(Mask, Vec<usize>), ApiError> {
+    cancel.check()?;
     let (mask, drawn) = sparse_mask(store, geometry, cell, user_id, label, axis)?;
     if drawn.len() < 2 {
         return Err(ApiError::bad_request(format!(
@@ -76,6 +80,7 @@ pub fn interpolate_label(
         axis,
         drawn: &drawn,
     })?;
+    cancel.check()?;
     Ok((out, drawn))
 }
 
@@ -89,6 +94,7 @@ pub fn label_volume(
     user_id: i64,
     method: &dyn Interpolator,
     only_label: Option<u16>,
+    cancel: &Cancel,
 ) -> Result<LabelVolume, ApiError> {
     let drawn = store.drawn_labels(cell, user_id)?;
     let mut best: Vec<(u16, Axis, usize)> = Vec::new();
@@ -113,7 +119,8 @@ pub fn label_volume(
     best.sort_by_key(|b| b.0);
     let mut out: LabelVolume = Volume::zeros(geometry.clone());
     for (label, axis, _) in best {
-        let (mask, _) = interpolate_label(store, geometry, cell, user_id, label, axis, method)?;
+        let (mask, _) =
+            interpolate_label(store, geometry, cell, user_id, label, axis, method, cancel)?;
         for (o, &m) in out.data_mut().iter_mut().zip(mask.data()) {
             if m {
                 *o = label;
@@ -142,6 +149,7 @@ impl GtCache {
     }
 
     /// The cached or newly computed label volume of a user.
+    #[allow(clippy::too_many_arguments)]
     pub fn get(
         &self,
         store: &Store,
@@ -150,6 +158,7 @@ impl GtCache {
         user_id: i64,
         method: &dyn Interpolator,
         only_label: Option<u16>,
+        cancel: &Cancel,
     ) -> Result<Arc<LabelVolume>, ApiError> {
         let rev = store.revision(cell, user_id)?;
         let key: GtKey = (
@@ -167,7 +176,7 @@ impl GtCache {
             }
         }
         let v = Arc::new(label_volume(
-            store, geometry, cell, user_id, method, only_label,
+            store, geometry, cell, user_id, method, only_label, cancel,
         )?);
         let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
         entries.retain(|(k, _, _)| *k != key);

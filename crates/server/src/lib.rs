@@ -9,8 +9,11 @@
 //! Users: on a loopback bind a name is enough (the user is created on first
 //! login); on any other bind, accounts with argon2 passwords are required
 //! (`interslice user add`). Sessions are random 256-bit tokens in an HttpOnly,
-//! SameSite=Strict cookie. A user reads and writes only their own tracings; a
-//! reviewer also reads everyone's.
+//! SameSite=Strict cookie; a session remembers whether a password opened it,
+//! and a server that requires passwords refuses the others. A loopback server
+//! answers only loopback `Host` names ([`host`]). A user reads and writes only
+//! their own tracings; a reviewer also reads everyone's. Long computations
+//! stop when their request is gone ([`jobs`]).
 #![deny(missing_docs)]
 
 pub mod api;
@@ -20,6 +23,9 @@ pub mod client;
 pub mod consensus;
 pub mod error;
 pub mod groundtruth;
+pub mod host;
+pub mod jobs;
+pub mod limits;
 pub mod loadtest;
 pub mod openapi;
 pub mod project_file;
@@ -49,12 +55,16 @@ pub struct Config {
     pub cache_cells: usize,
     /// Largest request body accepted, bytes (larger → 413).
     pub body_limit: usize,
-    /// Time limit of one request (interpolation of a large cell included).
+    /// Time limit of one request (interpolation of a large cell included);
+    /// its computation is stopped when it runs out.
     pub timeout: Duration,
     /// The components to trace: written to the project file and made the
     /// project's labels. None: the project file's, else the database's
     /// (a new database starts with the cell-CT set).
     pub components: Option<interslice_core::components::Components>,
+    /// URLs a reverse proxy serves this server under (`--public-url`): their
+    /// host names are answered besides the loopback ones on a loopback bind.
+    pub public_urls: Vec<String>,
 }
 
 impl Config {
@@ -70,6 +80,7 @@ impl Config {
             body_limit: 16 << 20,
             timeout: Duration::from_secs(300),
             components: None,
+            public_urls: Vec::new(),
         }
     }
 }
@@ -88,6 +99,10 @@ pub struct AppState {
     pub auth_required: bool,
     /// Interpolated ground truths, for overlays and evaluation.
     pub gt_cache: groundtruth::GtCache,
+    /// Running computations; cancelled on shutdown.
+    pub jobs: Arc<jobs::Jobs>,
+    /// Which `Host` names are answered.
+    pub hosts: Arc<host::HostPolicy>,
 }
 
 /// The state as handlers get it.
@@ -118,6 +133,16 @@ impl AppState {
                 .context("cannot set the project's components")?;
         }
         let auth_required = config.require_login || !config.bind.ip().is_loopback();
+        let extra = config
+            .public_urls
+            .iter()
+            .map(|u| host::public_url_host(u))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(anyhow::Error::msg)?;
+        let hosts = Arc::new(host::HostPolicy {
+            loopback_only: config.bind.ip().is_loopback(),
+            extra,
+        });
         let state = Arc::new(AppState {
             dir,
             store: Arc::new(store),
@@ -125,6 +150,8 @@ impl AppState {
             cache: cells::CellCache::new(config.cache_cells),
             auth_required,
             gt_cache: groundtruth::GtCache::new(4),
+            jobs: Arc::new(jobs::Jobs::default()),
+            hosts,
         });
         state.rescan().context("cannot list the project folder")?;
         Ok(state)
@@ -190,18 +217,22 @@ impl AppState {
 }
 
 /// The full application: API, OpenAPI document and web UI, with the body
-/// limit, request timeout and panic catcher.
+/// limit, request timeout (408, its computation stopped), `Host` check and
+/// panic catcher.
 pub fn app(state: SharedState, config: &Config) -> Router {
     use tower_http::catch_panic::CatchPanicLayer;
-    use tower_http::timeout::TimeoutLayer;
+    let limit = config.timeout;
+    let hosts = state.hosts.clone();
     api::router()
         .merge(web::router())
-        .layer(axum::middleware::from_fn(close_after_refused_body))
         .layer(axum::extract::DefaultBodyLimit::max(config.body_limit))
-        .layer(TimeoutLayer::with_status_code(
-            axum::http::StatusCode::REQUEST_TIMEOUT,
-            config.timeout,
-        ))
+        .layer(axum::middleware::from_fn(move |req, next| {
+            jobs::timeout(limit, req, next)
+        }))
+        .layer(axum::middleware::from_fn(close_after_refused_body))
+        .layer(axum::middleware::from_fn(move |req, next| {
+            host::check(hosts.clone(), req, next)
+        }))
         .layer(CatchPanicLayer::custom(
             |_err: Box<dyn std::any::Any + Send>| {
                 error::error_response(
@@ -236,7 +267,14 @@ async fn close_after_refused_body(
     resp
 }
 
-/// Bind, call `ready` with the bound address, and serve until Ctrl-C / SIGTERM.
+/// How long a stopping server waits for its requests to end.
+pub const SHUTDOWN_GRACE: Duration = Duration::from_secs(3);
+
+/// Bind, call `ready` with the bound address, and serve until Ctrl-C /
+/// SIGTERM. On the signal the server stops accepting, cancels every running
+/// computation and returns once its requests have ended, or after
+/// [`SHUTDOWN_GRACE`] whatever still runs (the caller then ends the process
+/// without waiting for blocking threads).
 pub async fn run(config: Config, ready: impl FnOnce(SocketAddr, &AppState)) -> anyhow::Result<()> {
     let state = AppState::open(&config)?;
     let listener = tokio::net::TcpListener::bind(config.bind)
@@ -244,11 +282,25 @@ pub async fn run(config: Config, ready: impl FnOnce(SocketAddr, &AppState)) -> a
         .with_context(|| format!("cannot listen on {}", config.bind))?;
     let addr = listener.local_addr()?;
     ready(addr, &state);
+    let jobs = state.jobs.clone();
     let app = app(state, &config);
-    axum::serve(listener, app)
-        .with_graceful_shutdown(shutdown_signal())
-        .await
-        .context("server failed")
+    let stopping = Arc::new(tokio::sync::Notify::new());
+    let told = stopping.clone();
+    let server = axum::serve(listener, app).with_graceful_shutdown(async move {
+        shutdown_signal().await;
+        jobs.shutdown();
+        told.notify_one();
+    });
+    tokio::select! {
+        r = server => r.context("server failed"),
+        _ = async {
+            stopping.notified().await;
+            tokio::time::sleep(SHUTDOWN_GRACE).await;
+        } => {
+            eprintln!("interslice: stopped with requests still running");
+            Ok(())
+        }
+    }
 }
 
 async fn shutdown_signal() {
@@ -306,6 +358,7 @@ pub fn spawn(config: Config) -> anyhow::Result<RunningServer> {
     let addr = std_listener.local_addr()?;
     let (tx, rx) = tokio::sync::oneshot::channel::<()>();
     let app = app(state.clone(), &config);
+    let jobs = state.jobs.clone();
     let thread = std::thread::spawn(move || {
         let rt = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(2)
@@ -315,8 +368,9 @@ pub fn spawn(config: Config) -> anyhow::Result<RunningServer> {
         rt.block_on(async move {
             let listener = tokio::net::TcpListener::from_std(std_listener).expect("listener");
             let _ = axum::serve(listener, app)
-                .with_graceful_shutdown(async {
+                .with_graceful_shutdown(async move {
                     let _ = rx.await;
+                    jobs.shutdown();
                 })
                 .await;
         });

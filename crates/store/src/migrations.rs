@@ -141,6 +141,12 @@ CREATE TRIGGER audit_no_delete BEFORE DELETE ON audit
     // 2: the change and audit logs record per-contour deltas instead of whole
     // slices (see the file for how version-1 data is converted).
     include_str!("migrations/002_change_deltas.sql"),
+    // 3: how a session was opened. A session opened by name alone (loopback)
+    // is refused by a server that requires passwords; sessions from before
+    // this column count as opened by name.
+    r#"
+ALTER TABLE sessions ADD COLUMN with_password INTEGER NOT NULL DEFAULT 0;
+"#,
 ];
 
 /// The first version whose change and audit logs hold deltas: migrating a

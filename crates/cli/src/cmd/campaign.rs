@@ -337,7 +337,7 @@ fn rate_otsu(
         fill_holes: true,
         ..Default::default()
     };
-    let labels = segment(&v, &p)?;
+    let labels = segment(&v, &p, &interslice_core::Cancel::new())?;
     let params = serde_json::json!({
         "classes": p.classes, "smooth": p.smooth_sigma,
         "largest_component": p.largest_component, "fill_holes": p.fill_holes,

@@ -71,6 +71,7 @@ pub fn run(mut a: Args) -> Result<()> {
             user.id,
             method.as_ref(),
             a.label,
+            &interslice_core::Cancel::new(),
         )?;
         if labels.data().iter().all(|&v| v == 0) {
             bail!("the interpolated volume is empty");

@@ -34,7 +34,14 @@ pub struct Args {
     /// Print the available methods (the default first) and exit.
     #[arg(long)]
     pub list: bool,
+    /// Most labels interpolated (each label is interpolated on its own, so an
+    /// intensity image read as labels would run for minutes).
+    #[arg(long, default_value_t = DEFAULT_MAX_LABELS)]
+    pub max_labels: usize,
 }
+
+/// Default of `--max-labels`: every label an 8-bit label volume can hold.
+pub const DEFAULT_MAX_LABELS: usize = 255;
 
 /// Run `interpolate`.
 pub fn run(a: Args) -> Result<()> {
@@ -61,6 +68,15 @@ pub fn run(a: Args) -> Result<()> {
         .to_labels()
         .with_context(|| format!("{} is not a label volume", sparse_path.display()))?;
     let drawn = drawn_slices(&sparse, a.axis, a.drawn.as_deref())?;
+    let labels = interslice_interp::labels::drawn_labels(&sparse, a.axis, &drawn).len();
+    if labels > a.max_labels {
+        bail!(
+            "{} has {labels} labels on its drawn slices, more than --max-labels {} \
+             (is it an intensity image? pass --max-labels {labels} to interpolate every one)",
+            sparse_path.display(),
+            a.max_labels
+        );
+    }
     let result = interpolate_labels(method.as_ref(), &sparse, a.axis, &drawn)
         .with_context(|| format!("method {}", method.name()))?;
     let written = same_type(&input, result)?;

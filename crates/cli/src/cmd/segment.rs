@@ -83,8 +83,8 @@ pub fn run(a: Args) -> Result<()> {
     }
     let v = interslice_io::read_volume(&a.input)
         .with_context(|| format!("reading {}", a.input.display()))?;
-    let seg =
-        segment_detailed(&v, &p).with_context(|| format!("segmenting {}", a.input.display()))?;
+    let seg = segment_detailed(&v, &p, &interslice_core::Cancel::new())
+        .with_context(|| format!("segmenting {}", a.input.display()))?;
     interslice_io::write_labels(&a.out, &seg.labels)
         .with_context(|| format!("writing {}", a.out.display()))?;
     let g = seg.labels.geometry();

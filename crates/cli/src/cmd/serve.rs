@@ -21,6 +21,10 @@ pub struct Args {
     /// Largest request body accepted, in MiB (larger requests get 413).
     #[arg(long, default_value_t = 16)]
     pub body_limit_mib: usize,
+    /// The URL a reverse proxy serves this server under (repeatable). On
+    /// loopback only localhost names are answered, and the hosts of these URLs.
+    #[arg(long = "public-url", value_name = "URL")]
+    pub public_urls: Vec<String>,
     /// The components traced in this project, comma-separated ("Tumour,Oedema"),
     /// valued 1, 2, … in order; kept in DIR/interslice.toml. Default: the
     /// project file's, else Cell, Nucleus, Nucleolus 1, Nucleolus 2.
@@ -41,6 +45,7 @@ impl Args {
         c.require_login = self.require_login;
         c.body_limit = self.body_limit_mib << 20;
         c.components = self.components.clone();
+        c.public_urls = self.public_urls.clone();
         c
     }
 }
@@ -55,7 +60,7 @@ pub fn serve(config: interslice_server::Config) -> Result<()> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()?;
-    rt.block_on(interslice_server::run(config, |addr, state| {
+    let served = rt.block_on(interslice_server::run(config, |addr, state| {
         let cells = state.cells.read().map(|c| c.len()).unwrap_or(0);
         let login = if state.auth_required {
             "accounts with passwords required (interslice user add)"
@@ -64,5 +69,9 @@ pub fn serve(config: interslice_server::Config) -> Result<()> {
         };
         println!("interslice: {cells} cell(s) in {}", state.dir.display());
         println!("interslice: serving on http://{addr}/  ({login}; Ctrl-C stops)");
-    }))
+    }));
+    // A computation that has not reached its next cancellation check yet
+    // must not hold the process: its answer has nobody to go to.
+    rt.shutdown_timeout(std::time::Duration::from_millis(500));
+    served
 }

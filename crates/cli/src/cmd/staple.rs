@@ -99,7 +99,7 @@ pub fn run(mut a: Args) -> Result<()> {
     if let Some(l) = a.label {
         let masks: Vec<Mask> = vols.iter().map(|v| v.mask_of(l)).collect();
         let refs: Vec<&Mask> = masks.iter().collect();
-        let s = staple(&refs, params)?;
+        let s = staple(&refs, params, &interslice_core::Cancel::new())?;
         let out: LabelVolume = s.consensus.map(u16::from);
         interslice_io::write_labels(&a.out, &out)
             .with_context(|| format!("writing {}", a.out.display()))?;
@@ -110,7 +110,7 @@ pub fn run(mut a: Args) -> Result<()> {
         runs.push((l, s));
     } else {
         let refs: Vec<&LabelVolume> = vols.iter().collect();
-        let (out, per) = staple_labels(&refs, params)?;
+        let (out, per) = staple_labels(&refs, params, &interslice_core::Cancel::new())?;
         interslice_io::write_labels(&a.out, &out)
             .with_context(|| format!("writing {}", a.out.display()))?;
         runs = per;

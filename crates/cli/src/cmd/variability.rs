@@ -217,6 +217,8 @@ pub fn run(mut a: Args) -> Result<()> {
     a.label = a.label_arg.as_ref().map(|l| l.resolve_in(&components)).transpose()?;
     let method = interslice_server::api::method_by_name(a.method.as_deref())
         .map_err(|e| anyhow::anyhow!("{}", e.message))?;
+    // A command runs to its end (Ctrl-C ends the process): nothing cancels it.
+    let never = interslice_core::Cancel::new();
     let out = a.out.clone().unwrap_or_else(|| a.dir.join("variability"));
     let cdir = a
         .consensus_dir
@@ -255,9 +257,9 @@ pub fn run(mut a: Args) -> Result<()> {
         let g = volume.geometry().clone();
         drop(volume);
         unit.get_or_insert(g.unit);
-        let raters = rater_masks(&store, &g, cell, method.as_ref(), a.label)
+        let raters = rater_masks(&store, &g, cell, method.as_ref(), a.label, &never)
             .map_err(|e| anyhow::anyhow!("cell {cell}: {}", e.message))?;
-        let consensus = consensus_of(&g, &raters, StapleParams::default())
+        let consensus = consensus_of(&g, &raters, StapleParams::default(), &never)
             .map_err(|e| anyhow::anyhow!("cell {cell}: {}", e.message))?;
         if consensus.per_label.is_empty() {
             continue;

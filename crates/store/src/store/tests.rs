@@ -103,9 +103,13 @@ fn passwords_sessions_and_roles() {
         s.verify_password("nobody", "x"),
         Err(StoreError::BadCredentials)
     ));
-    let t = s.create_session(u.id).unwrap();
+    let t = s.create_session(u.id, true).unwrap();
     assert_eq!(t.len(), 64);
-    assert_eq!(s.session_user(&t).unwrap().unwrap().name, "bob");
+    let (who, with_password) = s.session_user(&t).unwrap().unwrap();
+    assert_eq!((who.name.as_str(), with_password), ("bob", true));
+    // A session remembers that it was opened by name alone.
+    let by_name = s.create_session(u.id, false).unwrap();
+    assert!(!s.session_user(&by_name).unwrap().unwrap().1);
     s.delete_session(&t).unwrap();
     assert!(s.session_user(&t).unwrap().is_none());
     // Updating the role keeps the password.

@@ -151,8 +151,9 @@ impl Store {
         Ok(user)
     }
 
-    /// Start a login session; returns its random token (256 bits, hex).
-    pub fn create_session(&self, user_id: i64) -> Result<String> {
+    /// Start a login session, opened with a password or by name alone;
+    /// returns its random token (256 bits, hex).
+    pub fn create_session(&self, user_id: i64, with_password: bool) -> Result<String> {
         let mut bytes = [0u8; 32];
         rand::rngs::OsRng.fill_bytes(&mut bytes);
         let token: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
@@ -160,23 +161,32 @@ impl Store {
             tx.prepare_cached("DELETE FROM sessions WHERE expires_unix < ?1")?
                 .execute([unix_now()])?;
             tx.prepare_cached(
-                "INSERT INTO sessions (token, user_id, created, expires_unix) VALUES (?1, ?2, ?3, ?4)",
+                "INSERT INTO sessions (token, user_id, created, expires_unix, with_password) \
+                 VALUES (?1, ?2, ?3, ?4, ?5)",
             )?
-            .execute(params![token, user_id, now_rfc3339(), unix_now() + SESSION_SECONDS])?;
+            .execute(params![
+                token,
+                user_id,
+                now_rfc3339(),
+                unix_now() + SESSION_SECONDS,
+                with_password
+            ])?;
             audit(tx, Some(user_id), None, "login", serde_json::json!({}))?;
             Ok(token)
         })
     }
 
-    /// The user of a live session token.
-    pub fn session_user(&self, token: &str) -> Result<Option<User>> {
+    /// The user of a live session token, and whether a password opened it.
+    pub fn session_user(&self, token: &str) -> Result<Option<(User, bool)>> {
         self.read(|tx| {
             Ok(tx
                 .prepare_cached(
-                    "SELECT u.id, u.name, u.role, u.password_hash FROM sessions s \
+                    "SELECT u.id, u.name, u.role, u.password_hash, s.with_password FROM sessions s \
                      JOIN users u ON u.id = s.user_id WHERE s.token = ?1 AND s.expires_unix >= ?2",
                 )?
-                .query_row(params![token, unix_now()], user_from_row)
+                .query_row(params![token, unix_now()], |r| {
+                    Ok((user_from_row(r)?, r.get(4)?))
+                })
                 .optional()?)
         })
     }
