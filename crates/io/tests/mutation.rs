@@ -15,7 +15,7 @@
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
@@ -703,6 +703,19 @@ fn check(bin: &Path, root: &Path, k: usize, v: &Variant) -> Option<String> {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    // The pipes are drained while the child runs (a long message must not
+    // block it on a full pipe).
+    let drain = |r: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut r) = r {
+                let _ = r.read_to_end(&mut buf);
+            }
+            buf
+        })
+    };
+    let out_thread = drain(child.stdout.take().map(|r| Box::new(r) as _));
+    let err_thread = drain(child.stderr.take().map(|r| Box::new(r) as _));
     let start = Instant::now();
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
@@ -715,9 +728,8 @@ fn check(bin: &Path, root: &Path, k: usize, v: &Variant) -> Option<String> {
         }
         std::thread::sleep(Duration::from_millis(2));
     };
-    let out = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out_thread.join().unwrap()).into_owned();
+    let stderr = String::from_utf8_lossy(&err_thread.join().unwrap()).into_owned();
     let _ = std::fs::remove_dir_all(&dir);
     match status.code() {
         Some(0) => {
