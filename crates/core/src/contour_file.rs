@@ -18,6 +18,21 @@ pub const FORMAT: &str = "interslice-contours";
 /// The version this code reads and writes.
 pub const VERSION: u32 = 1;
 
+/// Longest contours file [`read`] accepts, in bytes (512 MiB): the parser
+/// holds the whole file, so a bound on it bounds the memory of a read.
+pub const MAX_FILE_BYTES: usize = 512 << 20;
+/// Most contours a file may hold.
+pub const MAX_CONTOURS: usize = 1_000_000;
+/// Most points one contour may have.
+pub const MAX_POINTS_PER_CONTOUR: usize = 1_000_000;
+/// Most points all contours of a file may have together.
+pub const MAX_POINTS: usize = 50_000_000;
+/// Most slices a file may mark drawn-empty.
+pub const MAX_DRAWN_EMPTY: usize = 1_000_000;
+/// Most voxels the file's grid may have (2^31, what the volume readers
+/// accept by default): rasterising the contours allocates the grid.
+pub const MAX_VOXELS: u64 = 1 << 31;
+
 /// A structure that can be traced: label id, display name and colour.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct LabelInfo {
@@ -92,6 +107,50 @@ impl ContourFile {
     /// for the same label by the same author.
     pub fn validate(&self) -> Result<(), CoreError> {
         self.geometry.validate()?;
+        let voxels = self
+            .geometry
+            .dims
+            .iter()
+            .map(|&d| d as u64)
+            .try_fold(1u64, |a, d| a.checked_mul(d))
+            .unwrap_or(u64::MAX);
+        if voxels > MAX_VOXELS {
+            return Err(invalid(format!(
+                "grid {:?} has more than {MAX_VOXELS} voxels",
+                self.geometry.dims
+            )));
+        }
+        if self.contours.len() > MAX_CONTOURS {
+            return Err(invalid(format!(
+                "{} contours (at most {MAX_CONTOURS})",
+                self.contours.len()
+            )));
+        }
+        if self.drawn_empty.len() > MAX_DRAWN_EMPTY {
+            return Err(invalid(format!(
+                "{} drawn-empty slices (at most {MAX_DRAWN_EMPTY})",
+                self.drawn_empty.len()
+            )));
+        }
+        let mut total = 0usize;
+        for (n, c) in self.contours.iter().enumerate() {
+            if c.points.len() > MAX_POINTS_PER_CONTOUR {
+                return Err(invalid(format!(
+                    "contour #{n} has {} points (at most {MAX_POINTS_PER_CONTOUR})",
+                    c.points.len()
+                )));
+            }
+            total += c.points.len();
+        }
+        if total > MAX_POINTS {
+            return Err(invalid(format!(
+                "{total} points in all (at most {MAX_POINTS})"
+            )));
+        }
+        let d = self.geometry.direction;
+        if d.iter().flatten().any(|x| !x.is_finite()) {
+            return Err(invalid(format!("direction {d:?} is not finite")));
+        }
         let mut ids = HashSet::new();
         for l in &self.labels {
             if l.id == 0 {
@@ -263,10 +322,18 @@ struct Wire {
 
 /// Parse and validate a contours file.
 ///
-/// Errors (one line each): malformed JSON (with line and column), a file of
-/// another format, a version other than [`VERSION`], unknown keys, and
-/// everything [`ContourFile::validate`] rejects.
+/// Errors (one line each): a text longer than [`MAX_FILE_BYTES`], malformed
+/// JSON (with line and column), a file of another format, a version other
+/// than [`VERSION`], unknown keys, and everything [`ContourFile::validate`]
+/// rejects (counts past [`MAX_CONTOURS`], [`MAX_POINTS_PER_CONTOUR`],
+/// [`MAX_POINTS`], [`MAX_DRAWN_EMPTY`], a grid past [`MAX_VOXELS`]).
 pub fn read(text: &str) -> Result<ContourFile, CoreError> {
+    if text.len() > MAX_FILE_BYTES {
+        return Err(invalid(format!(
+            "file of {} bytes is larger than the {MAX_FILE_BYTES} bytes a contours file may have",
+            text.len()
+        )));
+    }
     // A map first: a JSON array would otherwise fill the header by position.
     let mut header: serde_json::Map<String, serde_json::Value> =
         serde_json::from_str(text).map_err(|e| invalid(format!("malformed JSON: {e}")))?;
@@ -613,5 +680,36 @@ mod tests {
             color: "#000000".into(),
         });
         assert!(write(&f).unwrap_err().to_string().contains("twice"));
+    }
+
+    #[test]
+    fn hostile_sizes_are_refused_before_use() {
+        // A grid that rasterising would have to allocate: 2^33 voxels.
+        let e = err(&GOLDEN.replace("\"dims\":[40,32,24]", "\"dims\":[2048,2048,2048]"));
+        assert!(e.contains("more than 2147483648 voxels"), "{e}");
+        // A direction with a non-finite entry.
+        let g = GOLDEN.replace(
+            "\"unit\":\"um\"",
+            "\"unit\":\"um\",\"direction\":[[1,0,0],[0,1,0],[0,0,1e999]]",
+        );
+        assert!(err(&g).contains("contours file"), "{}", err(&g));
+        // Too many points in one contour.
+        let mut f =
+            ContourFile::new(Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap());
+        f.contours.push(Contour::new(
+            SliceRef {
+                axis: Axis::Z,
+                index: 0,
+            },
+            1,
+            vec![[1.0, 1.0]; MAX_POINTS_PER_CONTOUR + 1],
+            "a",
+            "t",
+        ));
+        let e = f.validate().unwrap_err().to_string();
+        assert!(e.contains("points (at most"), "{e}");
+        // A text longer than the bound is refused before it is parsed.
+        let long = " ".repeat(MAX_FILE_BYTES + 1);
+        assert!(err(&long).contains("larger than"));
     }
 }

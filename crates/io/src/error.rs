@@ -94,9 +94,14 @@ impl IoError {
     }
 }
 
-/// Collapse line breaks so a message from a library stays on one line.
+/// Longest message kept, in characters: a library may format a whole
+/// hostile header into its error (a TIFF's 65535 bits-per-sample values).
+const MAX_MESSAGE: usize = 300;
+
+/// Collapse line breaks so a message from a library stays on one line, and
+/// cut it to [`MAX_MESSAGE`] characters.
 fn one_line(s: String) -> String {
-    if s.contains(['\n', '\r']) {
+    let s = if s.contains(['\n', '\r']) {
         s.split(['\n', '\r'])
             .map(str::trim)
             .filter(|p| !p.is_empty())
@@ -104,5 +109,9 @@ fn one_line(s: String) -> String {
             .join("; ")
     } else {
         s
+    };
+    match s.char_indices().nth(MAX_MESSAGE) {
+        Some((cut, _)) => format!("{}...", &s[..cut]),
+        None => s,
     }
 }

@@ -17,11 +17,12 @@
 //! next to the target under a temporary name and swapped in when complete;
 //! an existing folder is replaced only when it holds nothing but
 //! `slice_*.png` files.
-use crate::IoError;
 use crate::header::num;
+use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want, try_vec};
 use crate::planes::{Plane, Stack};
-use crate::raw::{self, MAX_VOXELS};
-use crate::tiff_stack;
+use crate::raw::{self, RawType};
+use crate::{Format, IoError};
+use crate::{source, tiff_stack};
 use interslice_core::geometry::IDENTITY_DIRECTION;
 use interslice_core::{AnyVolume, Geometry, LengthUnit};
 use rayon::prelude::*;
@@ -61,10 +62,19 @@ fn list(path: &Path) -> Result<(Vec<PathBuf>, Kind), IoError> {
         let Some(kind) = kind_of(&name) else {
             continue;
         };
-        let is_file = entry
-            .file_type()
-            .map(|t| t.is_file() || t.is_symlink())
-            .unwrap_or(false);
+        let Ok(ft) = entry.file_type() else {
+            continue;
+        };
+        // A link is followed only to a file inside the folder; a link that
+        // leads out is refused whether or not its target exists.
+        if ft.is_symlink() && !source::stays_inside(path, &name) {
+            return Err(IoError::unsupported(
+                path,
+                format!("slice '{name}' is a link that leads out of the folder"),
+            ));
+        }
+        let is_file = ft.is_file()
+            || (ft.is_symlink() && std::fs::metadata(entry.path()).is_ok_and(|m| m.is_file()));
         if is_file {
             files.push((name, kind));
         }
@@ -93,17 +103,46 @@ fn png_err(path: &Path, e: png::DecodingError) -> IoError {
     }
 }
 
-/// One PNG slice: its size, pixels and `interslice` text, if any.
-fn read_png(path: &Path) -> Result<(usize, usize, Plane, Option<String>), IoError> {
-    let mut dec = png::Decoder::new(raw::open(path)?);
+/// Most a PNG's deflate stream expands (deflate's largest ratio is about
+/// 1032:1): a header that claims more pixels than its file could hold is
+/// refused before the image buffer is allocated.
+const MAX_EXPANSION: u64 = 1100;
+
+/// Memory the PNG decoder may use besides the image (text chunks, ICC
+/// profiles, its own buffers).
+const PNG_DECODER_BYTES: usize = 64 << 20;
+
+/// A PNG slice whose header has been read.
+struct PngSlice {
+    reader: png::Reader<std::io::BufReader<std::fs::File>>,
+    header: SliceHeader,
+    text: Option<String>,
+}
+
+/// Size and stored type of a slice, from its header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct SliceHeader {
+    w: usize,
+    h: usize,
+    t: RawType,
+}
+
+/// Open a PNG slice and read its header (nothing of the image is decoded).
+fn png_header(path: &Path) -> Result<PngSlice, IoError> {
+    let file = raw::open(path)?;
+    let file_len = file
+        .get_ref()
+        .metadata()
+        .map_err(|e| IoError::read(path, e))?
+        .len();
+    let mut dec = png::Decoder::new(file);
     dec.set_transformations(png::Transformations::IDENTITY);
     dec.set_limits(png::Limits {
-        bytes: MAX_VOXELS.min(usize::MAX / 4),
+        bytes: PNG_DECODER_BYTES,
     });
-    let mut reader = dec.read_info().map_err(|e| png_err(path, e))?;
+    let reader = dec.read_info().map_err(|e| png_err(path, e))?;
     let info = reader.info();
     let (w, h) = (info.width as usize, info.height as usize);
-    let depth = info.bit_depth as usize;
     if info.color_type != png::ColorType::Grayscale {
         return Err(IoError::unsupported(
             path,
@@ -113,12 +152,50 @@ fn read_png(path: &Path) -> Result<(usize, usize, Plane, Option<String>), IoErro
             ),
         ));
     }
+    let t = match info.bit_depth {
+        png::BitDepth::Sixteen => RawType::U16,
+        _ => RawType::U8,
+    };
+    // The decoded rows (with their filter bytes) must fit what the file can expand to.
+    let depth = info.bit_depth as u64;
+    let row = (w as u64)
+        .saturating_mul(depth)
+        .div_ceil(8)
+        .saturating_add(1);
+    let need = row.saturating_mul(h as u64);
+    if need
+        > file_len
+            .saturating_mul(MAX_EXPANSION)
+            .saturating_add(1 << 16)
+    {
+        return Err(IoError::invalid(
+            path,
+            format!("PNG of {w} x {h} needs {need} bytes, more than the file can hold"),
+        ));
+    }
     let text = info
         .uncompressed_latin1_text
         .iter()
         .find(|t| t.keyword == TEXT_KEY)
         .map(|t| t.text.clone());
-    let mut buf = vec![0u8; reader.output_buffer_size()];
+    Ok(PngSlice {
+        reader,
+        header: SliceHeader { w, h, t },
+        text,
+    })
+}
+
+/// Decode the pixels of a PNG slice whose header was checked.
+fn png_pixels(path: &Path, slice: PngSlice) -> Result<Plane, IoError> {
+    let PngSlice {
+        mut reader,
+        header: SliceHeader { w, h, .. },
+        ..
+    } = slice;
+    let depth = reader.info().bit_depth as usize;
+    let size = reader.output_buffer_size();
+    let mut buf: Vec<u8> = try_vec(path, size)?;
+    buf.resize(size, 0);
     let out = reader.next_frame(&mut buf).map_err(|e| png_err(path, e))?;
     let line = out.line_size;
     let plane = match depth {
@@ -139,7 +216,7 @@ fn read_png(path: &Path) -> Result<(usize, usize, Plane, Option<String>), IoErro
         1 | 2 | 4 => {
             let per = 8 / depth;
             let mask = (1u16 << depth) as u8 - 1;
-            let mut px = Vec::with_capacity(w * h);
+            let mut px = try_vec(path, w * h)?;
             for row in buf.chunks(line).take(h) {
                 for x in 0..w {
                     let byte = row[x / per];
@@ -156,21 +233,40 @@ fn read_png(path: &Path) -> Result<(usize, usize, Plane, Option<String>), IoErro
             ));
         }
     };
-    Ok((w, h, plane, text))
+    Ok(plane)
 }
 
-/// One TIFF slice (exactly one page) and the geometry its ImageJ metadata gives.
-fn read_tiff(path: &Path) -> Result<(usize, usize, Plane, Geometry), IoError> {
-    let mut d = tiff_stack::decoder(path)?;
-    let g = tiff_stack::geometry_of(&mut d);
-    let (w, h, plane) = tiff_stack::read_page(path, &mut d)?;
+/// One TIFF slice (exactly one page): its decoder at the page, header and
+/// the geometry its ImageJ metadata gives.
+type TiffSlice = (
+    tiff::decoder::Decoder<std::io::BufReader<std::fs::File>>,
+    SliceHeader,
+    Geometry,
+    u64,
+);
+
+fn tiff_header(path: &Path, first: bool) -> Result<TiffSlice, IoError> {
+    let f = raw::open(path)?;
+    let len = f
+        .get_ref()
+        .metadata()
+        .map_err(|e| IoError::read(path, e))?
+        .len();
+    let mut d = tiff_stack::decoder(path, f)?;
+    let g = if first {
+        tiff_stack::geometry_of(path, &mut d)?
+    } else {
+        Geometry::new([1; 3], [1.0; 3], LengthUnit::Unknown)
+            .map_err(|e| IoError::invalid(path, e.to_string()))?
+    };
+    let (w, h, t) = tiff_stack::page_header(path, &mut d)?;
     if d.more_images() {
         return Err(IoError::unsupported(
             path,
             "TIFF slice has several pages (a slice folder needs one image per file; read the file itself as a stack)",
         ));
     }
-    Ok((w, h, plane, g))
+    Ok((d, SliceHeader { w, h, t }, g, len))
 }
 
 fn parse_list<const N: usize>(s: &str) -> Option<[f64; N]> {
@@ -212,50 +308,79 @@ fn geometry_from_text(path: &Path, text: Option<&str>) -> Result<Geometry, IoErr
         let d = parse_list::<9>(s).ok_or_else(|| bad("direction"))?;
         g.direction = [[d[0], d[1], d[2]], [d[3], d[4], d[5]], [d[6], d[7], d[8]]];
     }
-    g.validate()
-        .map_err(|e| IoError::invalid(path, e.to_string()))?;
-    Ok(g)
+    crate::header::checked(path, g)
 }
 
-/// Read a folder of slices as a volume.
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
+/// Read a folder of slices as a volume. The first slice's header gives the
+/// size and type, checked against the limits before any slice is decoded;
+/// every other slice's header must match it before its pixels are decoded.
+pub(crate) fn read(path: &Path, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
     let (files, kind) = list(path)?;
-    type Slice = (usize, usize, Plane, Option<Geometry>);
-    let slices: Vec<Slice> = files
+    let (first, g) = match kind {
+        Kind::Png => {
+            let s = png_header(&files[0])?;
+            let g = geometry_from_text(&files[0], s.text.as_deref())?;
+            (s.header, g)
+        }
+        Kind::Tiff => {
+            let (_, h, g, _) = tiff_header(&files[0], true)?;
+            (h, g)
+        }
+    };
+    let SliceHeader { w, h, t } = first;
+    let dims = [w, h, files.len()];
+    let data_bytes = (w as u64)
+        .saturating_mul(h as u64)
+        .saturating_mul(files.len() as u64)
+        .saturating_mul(t.size() as u64);
+    limits.check(path, dims, data_bytes)?;
+    if want == Want::Header {
+        let mut g = g;
+        g.dims = dims;
+        return Ok(Loaded::Header(VolumeHeader {
+            format: Format::SliceFolder,
+            geometry: g,
+            stored_type: t,
+            data_bytes,
+        }));
+    }
+    let same = |f: &Path, k: usize, s: SliceHeader| {
+        if s == first {
+            Ok(())
+        } else {
+            Err(IoError::invalid(
+                f,
+                format!(
+                    "slice {k} is {} x {} {:?} but the first is {w} x {h} {t:?} (all slices must have one size and type)",
+                    s.w, s.h, s.t
+                ),
+            ))
+        }
+    };
+    let planes: Vec<Plane> = files
         .par_iter()
         .enumerate()
-        .map(|(k, f)| -> Result<Slice, IoError> {
+        .map(|(k, f)| -> Result<Plane, IoError> {
             match kind {
                 Kind::Png => {
-                    let (w, h, p, text) = read_png(f)?;
-                    let g = if k == 0 {
-                        Some(geometry_from_text(f, text.as_deref())?)
-                    } else {
-                        None
-                    };
-                    Ok((w, h, p, g))
+                    let s = png_header(f)?;
+                    same(f, k, s.header)?;
+                    png_pixels(f, s)
                 }
                 Kind::Tiff => {
-                    let (w, h, p, g) = read_tiff(f)?;
-                    Ok((w, h, p, (k == 0).then_some(g)))
+                    let (d, s, _, len) = tiff_header(f, false)?;
+                    same(f, k, s)?;
+                    let (_, plane) = tiff_stack::read_page(f, d, (s.w, s.h, s.t), len)?;
+                    Ok(plane)
                 }
             }
         })
         .collect::<Result<_, _>>()?;
-    let g = slices
-        .first()
-        .and_then(|s| s.3.clone())
-        .ok_or_else(|| IoError::invalid(path, "no slices read"))?;
     let mut stack = Stack::default();
-    let mut voxels = 0usize;
-    for ((w, h, plane, _), f) in slices.into_iter().zip(&files) {
-        voxels = voxels.saturating_add(w * h);
-        if voxels > MAX_VOXELS {
-            return Err(IoError::unsupported(path, "slice folder is too large"));
-        }
+    for (plane, f) in planes.into_iter().zip(&files) {
         stack.push(f, w, h, plane)?;
     }
-    stack.finish(path, g)
+    stack.finish(path, g).map(Loaded::Volume)
 }
 
 fn metres_per_unit(u: LengthUnit) -> Option<f64> {

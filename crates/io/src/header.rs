@@ -72,8 +72,30 @@ pub fn geometry_from_axes(
         origin,
         direction,
     };
+    checked(path, g)
+}
+
+/// A geometry read from a header, checked: what [`Geometry::validate`]
+/// checks (dims, spacing finite and positive, origin finite), and a
+/// direction of finite, independent axes (degenerate `space directions` or
+/// a `TransformMatrix` with two equal columns are an error).
+pub fn checked(path: &Path, g: Geometry) -> Result<Geometry, IoError> {
     g.validate()
         .map_err(|e| IoError::invalid(path, e.to_string()))?;
+    let d = g.direction;
+    let det = d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1])
+        - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0])
+        + d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0]);
+    let norms_ok = (0..3).all(|c| {
+        let n = (0..3).map(|r| d[r][c] * d[r][c]).sum::<f64>().sqrt();
+        (n - 1.0).abs() < 1e-3
+    });
+    if !(det.is_finite() && det.abs() > 1e-6 && norms_ok) {
+        return Err(IoError::invalid(
+            path,
+            format!("direction {d:?} is degenerate (its axes must be independent unit vectors)"),
+        ));
+    }
     Ok(g)
 }
 

@@ -9,6 +9,7 @@
 #![deny(missing_docs)]
 
 pub mod error;
+pub mod limits;
 pub mod mesh;
 pub mod raw;
 
@@ -19,9 +20,14 @@ mod nii;
 mod nrrd;
 mod planes;
 pub mod segmentation;
+mod source;
 mod tiff_stack;
 
 pub use error::IoError;
+pub use limits::{ReadLimits, VolumeHeader};
+
+use limits::{Loaded, Want};
+use source::Source;
 
 use interslice_core::{AnyVolume, LabelVolume, Volume};
 use std::fmt;
@@ -64,6 +70,16 @@ impl Format {
         if !name.is_empty() && !name.contains('.') && !path.exists() {
             return Ok(Format::SliceFolder);
         }
+        Format::of_name(path)
+    }
+
+    /// The format a file name's extension gives, never a folder and without
+    /// looking at the file system.
+    pub fn of_name(path: &Path) -> Result<Format, IoError> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
         if name.ends_with(".nii.gz") {
             Ok(Format::NiftiGz)
         } else if name.ends_with(".nii") {
@@ -107,14 +123,98 @@ impl fmt::Display for Format {
     }
 }
 
-/// Read a volume; the format is chosen by [`Format::of_path`].
+/// Read a volume with the default [`ReadLimits`]; the format is chosen by
+/// [`Format::of_path`].
 pub fn read_volume(path: &Path) -> Result<AnyVolume, IoError> {
-    match Format::of_path(path)? {
-        Format::Nifti | Format::NiftiGz => nii::read(path),
-        Format::Nrrd | Format::Nhdr => nrrd::read(path),
-        Format::Mha | Format::Mhd => meta::read(path),
-        Format::Tiff => tiff_stack::read(path),
-        Format::SliceFolder => folder::read(path),
+    read_volume_with(path, &ReadLimits::default())
+}
+
+/// Read a volume within `limits`: the header is checked against them before
+/// any voxel data is read or decompressed.
+pub fn read_volume_with(path: &Path, limits: &ReadLimits) -> Result<AnyVolume, IoError> {
+    volume(path, load(Source::file(path), limits, Want::Volume)?)
+}
+
+/// Read only the header of a volume file (dims, type, spacing, ...): cheap,
+/// no voxel data is read. Checked against the default [`ReadLimits`].
+pub fn read_header(path: &Path) -> Result<VolumeHeader, IoError> {
+    header(
+        path,
+        load(Source::file(path), &ReadLimits::default(), Want::Header)?,
+    )
+}
+
+/// Read a volume from bytes in memory (an upload), the format chosen by
+/// `name` like [`Format::of_path`] does. Only self-contained files are read:
+/// a detached header (`.nhdr`, `.mhd`), a header that names a data file and
+/// a slice folder are refused. Errors name `name` only.
+pub fn read_bytes(name: &str, bytes: &[u8], limits: &ReadLimits) -> Result<AnyVolume, IoError> {
+    let path = Path::new(name);
+    volume(path, load(memory(path, bytes)?, limits, Want::Volume)?)
+}
+
+/// The header of a volume in memory (see [`read_bytes`]).
+pub fn read_header_bytes(name: &str, bytes: &[u8]) -> Result<VolumeHeader, IoError> {
+    let path = Path::new(name);
+    header(
+        path,
+        load(memory(path, bytes)?, &ReadLimits::default(), Want::Header)?,
+    )
+}
+
+/// A label volume from bytes in memory: [`read_bytes`] then
+/// [`AnyVolume::to_labels`].
+pub fn read_labels_bytes(
+    name: &str,
+    bytes: &[u8],
+    limits: &ReadLimits,
+) -> Result<LabelVolume, IoError> {
+    read_bytes(name, bytes, limits)?
+        .to_labels()
+        .map_err(|e| IoError::invalid(Path::new(name), format!("not a label volume: {e}")))
+}
+
+/// Bytes named `name` as a source, when their format is self-contained.
+fn memory<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<Source<'a>, IoError> {
+    // By name only: a name that happens to exist on disk must not matter.
+    let lower = path.to_string_lossy().to_ascii_lowercase();
+    let detached = [".nhdr", ".mhd"].iter().any(|e| lower.ends_with(e));
+    if detached || !lower.contains('.') || lower.ends_with('/') {
+        return Err(IoError::unsupported(
+            path,
+            "only a self-contained volume file can be read here (.nii, .nii.gz, .nrrd, .mha, .tif); a detached header or a folder of slices cannot",
+        ));
+    }
+    Ok(Source::memory(path, bytes))
+}
+
+fn load(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
+    let path = src.name;
+    let format = if src.bytes.is_some() {
+        Format::of_name(path)?
+    } else {
+        Format::of_path(path)?
+    };
+    match format {
+        Format::Nifti | Format::NiftiGz => nii::read(src, limits, want),
+        Format::Nrrd | Format::Nhdr => nrrd::read(src, limits, want),
+        Format::Mha | Format::Mhd => meta::read(src, limits, want),
+        Format::Tiff => tiff_stack::read(src, limits, want),
+        Format::SliceFolder => folder::read(path, limits, want),
+    }
+}
+
+fn volume(path: &Path, l: Loaded) -> Result<AnyVolume, IoError> {
+    match l {
+        Loaded::Volume(v) => Ok(v),
+        Loaded::Header(_) => Err(IoError::invalid(path, "no voxel data was read")),
+    }
+}
+
+fn header(path: &Path, l: Loaded) -> Result<VolumeHeader, IoError> {
+    match l {
+        Loaded::Header(h) => Ok(h),
+        Loaded::Volume(_) => Err(IoError::invalid(path, "no header was read")),
     }
 }
 

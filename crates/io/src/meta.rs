@@ -11,9 +11,11 @@
 //! `ElementSpacingUnits` line, which ITK ignores; without it the unit is mm.
 //! Write: `.mha` with zlib-compressed data, `.mhd` with an uncompressed `.raw`
 //! file of the same stem (data written first, then the header, both atomic).
-use crate::IoError;
 use crate::header::{self, num};
+use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want};
 use crate::raw::{self, Endian, RawType};
+use crate::source::Source;
+use crate::{Format, IoError};
 use interslice_core::{AnyVolume, LengthUnit};
 use std::collections::HashMap;
 use std::io::{Read, Write};
@@ -55,9 +57,11 @@ fn is_true(s: &str) -> bool {
     matches!(s.trim().to_ascii_lowercase().as_str(), "true" | "1" | "yes")
 }
 
-/// Read a `.mha` or `.mhd` file.
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
-    let mut r = raw::open(path)?;
+/// Read a `.mha` or `.mhd` file or bytes; a separate data file must be
+/// inside the header's folder (see [`Source::data_file`]).
+pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
+    let path = src.name;
+    let (mut r, total_len) = src.open()?;
     let mut consumed = 0usize;
     let mut fields: HashMap<String, String> = HashMap::new();
     let mut data_file = None;
@@ -136,7 +140,7 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     let mut dims = [1usize; 3];
     dims[..ndims].copy_from_slice(&sizes);
     let t = raw_type(path, need("ElementType")?)?;
-    let nbytes = raw::checked_bytes(path, dims, t)?;
+    let nbytes = limits.array_bytes(path, dims, t)?;
 
     let vals = |k: &str| -> Result<Option<Vec<f64>>, IoError> {
         match get(k) {
@@ -149,9 +153,17 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                 .map_err(|_| IoError::invalid(path, format!("bad {k} '{s}'"))),
         }
     };
+    // Without ElementSpacing the file has no spacing (1); a spacing it
+    // gives must be a positive number.
     let spacing = vals("ElementSpacing")?
         .or(vals("ElementSize")?)
         .unwrap_or_else(|| vec![1.0; ndims]);
+    if let Some(s) = spacing.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+        return Err(IoError::invalid(
+            path,
+            format!("ElementSpacing {s} is not a positive number"),
+        ));
+    }
     let origin = vals("Offset")?
         .or(vals("Origin")?)
         .or(vals("Position")?)
@@ -205,40 +217,51 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
         Endian::Little
     };
     let compressed = get("CompressedData").is_some_and(is_true);
-    let header_size: i64 = get("HeaderSize")
-        .map(|s| s.trim().parse().unwrap_or(0))
-        .unwrap_or(0);
+    let header_size: i64 = match get("HeaderSize") {
+        None => 0,
+        Some(h) => match h.trim().parse::<i64>() {
+            Ok(n) if n >= -1 => n,
+            _ => {
+                return Err(IoError::invalid(
+                    path,
+                    format!("bad HeaderSize '{h}' (a count of bytes, or -1)"),
+                ));
+            }
+        },
+    };
+    if data_file != "LOCAL"
+        && (data_file.starts_with("LIST")
+            || data_file.contains('%')
+            || data_file.split_whitespace().count() > 1)
+    {
+        return Err(IoError::unsupported(
+            path,
+            "MetaImage with one data file per slice is not supported",
+        ));
+    }
+    if want == Want::Header {
+        return Ok(Loaded::Header(VolumeHeader {
+            format: if data_file == "LOCAL" {
+                Format::Mha
+            } else {
+                Format::Mhd
+            },
+            geometry,
+            stored_type: t,
+            data_bytes: nbytes as u64,
+        }));
+    }
 
     let (mut reader, len, name): (Box<dyn std::io::BufRead>, u64, PathBuf) = if data_file == "LOCAL"
     {
-        let len = std::fs::metadata(path)
-            .map_err(|e| IoError::read(path, e))?
-            .len();
         (
-            Box::new(r),
-            len.saturating_sub(consumed as u64),
+            r,
+            total_len.saturating_sub(consumed as u64),
             path.to_path_buf(),
         )
     } else {
-        if data_file.starts_with("LIST")
-            || data_file.contains('%')
-            || data_file.split_whitespace().count() > 1
-        {
-            return Err(IoError::unsupported(
-                path,
-                "MetaImage with one data file per slice is not supported",
-            ));
-        }
-        let p = Path::new(&data_file);
-        let p = if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            path.parent().unwrap_or(Path::new(".")).join(p)
-        };
-        let len = std::fs::metadata(&p)
-            .map_err(|e| IoError::read(&p, e))?
-            .len();
-        (Box::new(raw::open(&p)?), len, p)
+        let (p, reader, len) = src.data_file(&data_file)?;
+        (reader, len, p)
     };
     let bytes = if compressed {
         let mut dec = flate2::read::ZlibDecoder::new(reader);
@@ -267,7 +290,7 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             .map_err(|e| IoError::read(&name, e))?;
         raw::read_data(&name, &mut reader, nbytes)?
     };
-    raw::decode_volume(&name, geometry, t, endian, &bytes)
+    raw::decode_volume(&name, geometry, t, endian, &bytes).map(Loaded::Volume)
 }
 
 fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> String {

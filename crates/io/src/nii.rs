@@ -14,8 +14,10 @@
 //! with `value * slope + inter` applied (the calibrated values are what the
 //! file means). Nothing is ever rescaled on write (slope 1, intercept 0).
 #![allow(clippy::needless_range_loop)] // 3x3 matrix code reads best with indices
-use crate::IoError;
+use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want, try_vec};
 use crate::raw::{self, Endian, RawType};
+use crate::source::Source;
+use crate::{Format, IoError};
 use flate2::read::MultiGzDecoder;
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
 use rayon::prelude::*;
@@ -67,29 +69,27 @@ fn datatype_code(t: RawType) -> (i16, i16) {
     }
 }
 
-/// Read a `.nii` or `.nii.gz` file (gzip is detected from the magic bytes).
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
-    let mut file = raw::open(path)?;
-    let mut magic = [0u8; 2];
-    let gz = {
-        use std::io::BufRead;
-        let head = file.fill_buf().map_err(|e| IoError::read(path, e))?;
-        if head.len() >= 2 {
-            magic.copy_from_slice(&head[..2]);
-        }
-        magic == [0x1f, 0x8b]
-    };
-    let file_len = std::fs::metadata(path)
-        .map_err(|e| IoError::read(path, e))?
-        .len();
+/// Read a `.nii` or `.nii.gz` file or bytes (gzip is detected from the magic bytes).
+pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
+    use std::io::BufRead;
+    let path = src.name;
+    let (mut file, file_len) = src.open()?;
+    let head = file.fill_buf().map_err(|e| IoError::read(path, e))?;
+    let gz = head.len() >= 2 && head[..2] == [0x1f, 0x8b];
     if gz {
-        read_from(path, &mut MultiGzDecoder::new(file), None)
+        read_from(path, &mut MultiGzDecoder::new(file), None, limits, want)
     } else {
-        read_from(path, &mut file, Some(file_len))
+        read_from(path, &mut file, Some(file_len), limits, want)
     }
 }
 
-fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<AnyVolume, IoError> {
+fn read_from(
+    path: &Path,
+    r: &mut dyn Read,
+    file_len: Option<u64>,
+    limits: &ReadLimits,
+    want: Want,
+) -> Result<Loaded, IoError> {
     let mut head = [0u8; 348];
     r.read_exact(&mut head).map_err(|e| match e.kind() {
         std::io::ErrorKind::UnexpectedEof => {
@@ -156,7 +156,8 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
         }
     }
     let t = raw_type(path, h.datatype)?;
-    let nbytes = raw::checked_bytes(path, dims, t)?;
+    let geometry = geometry_of(path, &h, dims, ndim)?;
+    let nbytes = limits.array_bytes(path, dims, t)?;
     let vox_offset = h.vox_offset;
     if !(vox_offset.is_finite() && vox_offset >= 348.0 && vox_offset < (1u64 << 31) as f32) {
         return Err(IoError::invalid(
@@ -165,6 +166,29 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
         ));
     }
     let vox_offset = vox_offset as u64;
+    // Extensions are skipped; inside a gzip stream they are inflated too,
+    // so they count towards what the read may decompress.
+    if file_len.is_none() && (vox_offset - 348).saturating_add(nbytes as u64) > limits.max_bytes {
+        return Err(IoError::unsupported(
+            path,
+            format!(
+                "vox_offset {vox_offset} and the voxel data are more than the {} bytes a read may decompress",
+                limits.max_bytes
+            ),
+        ));
+    }
+    if want == Want::Header {
+        return Ok(Loaded::Header(VolumeHeader {
+            format: if file_len.is_none() {
+                Format::NiftiGz
+            } else {
+                Format::Nifti
+            },
+            geometry,
+            stored_type: t,
+            data_bytes: nbytes as u64,
+        }));
+    }
     if let Some(len) = file_len {
         let need = vox_offset + nbytes as u64;
         if len < need {
@@ -180,8 +204,6 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
     std::io::copy(&mut r.take(vox_offset - 348), &mut std::io::sink())
         .map_err(|e| IoError::read(path, e))?;
     let bytes = raw::read_data(path, r, nbytes)?;
-
-    let geometry = geometry_of(path, &h, dims)?;
     let v = raw::decode_volume(path, geometry, t, endian, &bytes)?;
     drop(bytes);
     let slope = h.scl_slope;
@@ -189,7 +211,7 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
     let scaled =
         slope.is_finite() && slope != 0.0 && (slope != 1.0 || (inter.is_finite() && inter != 0.0));
     if !scaled {
-        return Ok(v);
+        return Ok(Loaded::Volume(v));
     }
     let (s, i) = (
         f64::from(slope),
@@ -201,15 +223,16 @@ fn read_from(path: &Path, r: &mut dyn Read, file_len: Option<u64>) -> Result<Any
     );
     let f = |x: f64| (x * s + i) as f32;
     let g = v.geometry().clone();
-    let data: Vec<f32> = match &v {
-        AnyVolume::U8(v) => v.data().par_iter().map(|&x| f(f64::from(x))).collect(),
-        AnyVolume::U16(v) => v.data().par_iter().map(|&x| f(f64::from(x))).collect(),
-        AnyVolume::I16(v) => v.data().par_iter().map(|&x| f(f64::from(x))).collect(),
-        AnyVolume::F32(v) => v.data().par_iter().map(|&x| f(f64::from(x))).collect(),
-    };
-    Ok(AnyVolume::F32(
+    let mut data: Vec<f32> = try_vec(path, g.len())?;
+    match &v {
+        AnyVolume::U8(v) => data.par_extend(v.data().par_iter().map(|&x| f(f64::from(x)))),
+        AnyVolume::U16(v) => data.par_extend(v.data().par_iter().map(|&x| f(f64::from(x)))),
+        AnyVolume::I16(v) => data.par_extend(v.data().par_iter().map(|&x| f(f64::from(x)))),
+        AnyVolume::F32(v) => data.par_extend(v.data().par_iter().map(|&x| f(f64::from(x)))),
+    }
+    Ok(Loaded::Volume(AnyVolume::F32(
         Volume::from_vec(g, data).map_err(|e| IoError::invalid(path, e.to_string()))?,
-    ))
+    )))
 }
 
 /// An f32 header value as the f64 of its shortest decimal form, so a
@@ -227,14 +250,28 @@ fn unit_of(xyzt_units: u8) -> LengthUnit {
     }
 }
 
-fn geometry_of(path: &Path, h: &nifti::NiftiHeader, dims: [usize; 3]) -> Result<Geometry, IoError> {
+/// Geometry of a header of `ndim` dimensions. `pixdim` of an axis the file
+/// has must be finite and positive (an error, not a silent 1); an axis past
+/// `ndim` (a 2D file's z) has no spacing in the file and gets 1.
+fn geometry_of(
+    path: &Path,
+    h: &nifti::NiftiHeader,
+    dims: [usize; 3],
+    ndim: usize,
+) -> Result<Geometry, IoError> {
     let mut spacing = [1.0f64; 3];
-    for (a, s) in spacing.iter_mut().enumerate() {
-        let p = decimal(h.pixdim[a + 1]).abs();
-        // ITK also falls back to 1 for a zero or missing pixdim.
-        if p.is_finite() && p > 0.0 {
-            *s = p;
+    for (a, s) in spacing.iter_mut().enumerate().take(ndim) {
+        let p = decimal(h.pixdim[a + 1]);
+        if !(p.is_finite() && p > 0.0) {
+            return Err(IoError::invalid(
+                path,
+                format!(
+                    "voxel spacing pixdim[{}] = {p} is not a positive number",
+                    a + 1
+                ),
+            ));
         }
+        *s = p;
     }
     // RAS affine: columns = axis directions (unit), translation.
     let (dir_ras, origin_ras) = if h.sform_code > 0 && sform_is_rigid(h) {
@@ -273,9 +310,7 @@ fn geometry_of(path: &Path, h: &nifti::NiftiHeader, dims: [usize; 3]) -> Result<
         origin,
         direction,
     };
-    g.validate()
-        .map_err(|e| IoError::invalid(path, e.to_string()))?;
-    Ok(g)
+    crate::header::checked(path, g)
 }
 
 fn srow(h: &nifti::NiftiHeader) -> [[f64; 4]; 3] {

@@ -14,9 +14,11 @@
 //!
 //! Write: `NRRD0004`, gzip, `space: left-posterior-superior`,
 //! `space directions`, `space origin`, `space units`.
-use crate::IoError;
 use crate::header::{self, num};
+use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want, try_vec};
 use crate::raw::{self, Endian, RawType};
+use crate::source::Source;
+use crate::{Format, IoError};
 use interslice_core::{AnyVolume, LengthUnit};
 use std::collections::HashMap;
 use std::io::{BufRead, Read, Write};
@@ -124,12 +126,16 @@ fn quoted_items(s: &str) -> Vec<String> {
     }
 }
 
+/// Most layers a 3D Slicer segmentation may have (Slicer makes one per set
+/// of overlapping segments: a handful).
+const MAX_LAYERS: usize = 256;
+
 /// The header fields (`name: value`, names lower-cased) and key/value pairs
 /// (`key:=value`) after the magic line, up to the blank line that ends an
 /// attached header (or the end of a detached one).
 type HeaderFields = (HashMap<String, String>, HashMap<String, String>);
 
-fn read_fields<R: BufRead>(
+fn read_fields<R: BufRead + ?Sized>(
     path: &Path,
     r: &mut R,
     consumed: &mut usize,
@@ -163,7 +169,7 @@ fn read_fields<R: BufRead>(
 /// The `key:=value` pairs of a NRRD header (3D Slicer keeps its segment
 /// table there), without reading the data.
 pub fn read_keys(path: &Path) -> Result<HashMap<String, String>, IoError> {
-    let mut r = raw::open(path)?;
+    let (mut r, _) = Source::file(path).open()?;
     let mut consumed = 0usize;
     let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
     if !first.starts_with("NRRD000") {
@@ -175,9 +181,11 @@ pub fn read_keys(path: &Path) -> Result<HashMap<String, String>, IoError> {
     Ok(read_fields(path, &mut r, &mut consumed)?.1)
 }
 
-/// Read a NRRD file.
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
-    let mut r = raw::open(path)?;
+/// Read a NRRD file or bytes; a detached data file must be inside the
+/// header's folder (see [`Source::data_file`]).
+pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
+    let path = src.name;
+    let (mut r, total_len) = src.open()?;
     let mut consumed = 0usize;
     let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
     if !first.starts_with("NRRD000") {
@@ -238,6 +246,15 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                     ),
                 ));
             }
+            if sizes[0] > MAX_LAYERS {
+                return Err(IoError::unsupported(
+                    path,
+                    format!(
+                        "a segmentation with {} layers is not supported (at most {MAX_LAYERS})",
+                        sizes[0]
+                    ),
+                ));
+            }
             (1, 3, sizes[0])
         }
         _ => {
@@ -251,10 +268,13 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     dims[..spatial].copy_from_slice(&sizes[skip..skip + spatial]);
     // All layers of a multi-layer segmentation are read at once, as if the
     // layer axis (the fastest) were part of x.
-    let wide_x = dims[0]
-        .checked_mul(layers)
-        .ok_or_else(|| IoError::unsupported(path, format!("NRRD sizes {sizes:?} are too large")))?;
-    let nbytes = raw::checked_bytes(path, [wide_x, dims[1], dims[2]], t)?;
+    let nbytes = dims
+        .iter()
+        .try_fold((layers * t.size()) as u64, |a, &d| a.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
+    limits.check(path, dims, nbytes)?;
+    let nbytes = usize::try_from(nbytes)
+        .map_err(|_| IoError::unsupported(path, format!("NRRD sizes {sizes:?} are too large")))?;
 
     let endian = match get("endian") {
         Some("big") => Endian::Big,
@@ -330,11 +350,21 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             .unwrap_or_default();
         let mut origin = [0.0; 3];
         for a in 0..3 {
-            let s = sp
-                .get(skip + a)
-                .copied()
-                .filter(|s| s.is_finite() && *s > 0.0)
-                .unwrap_or(1.0);
+            // An axis the file has must have a positive spacing when
+            // `spacings` is given; without `spacings` there is none (1).
+            let s = match sp.get(skip + a) {
+                Some(&s) if s.is_finite() && s > 0.0 => s,
+                Some(&s) if a < spatial => {
+                    return Err(IoError::invalid(
+                        path,
+                        format!(
+                            "NRRD spacing of axis {} is {s}, not a positive number",
+                            skip + a
+                        ),
+                    ));
+                }
+                _ => 1.0,
+            };
             axes[a][a] = s;
             if let Some(m) = mins.get(skip + a).filter(|m| m.is_finite()) {
                 origin[a] = *m;
@@ -349,44 +379,79 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
     };
 
     let encoding = need("encoding")?.to_ascii_lowercase();
-    let byte_skip: i64 = get("byte skip")
-        .map(|s| s.trim().parse().unwrap_or(0))
-        .unwrap_or(0);
-    let line_skip: usize = get("line skip")
-        .map(|s| s.trim().parse().unwrap_or(0))
-        .unwrap_or(0);
-
-    // The data stream: attached (rest of this file) or detached.
-    let data_path: Option<PathBuf> = match get("data file").or(get("datafile")) {
-        Some(f) => {
-            let f = f.trim();
-            if f.starts_with("LIST") || f.split_whitespace().count() > 1 {
-                return Err(IoError::unsupported(
+    let encoding = match encoding.as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(IoError::unsupported(
+                path,
+                format!("NRRD encoding '{other}' is not supported (use raw, gzip or ascii)"),
+            ));
+        }
+    };
+    let byte_skip: i64 = match get("byte skip") {
+        None => 0,
+        Some(s) => match s.trim().parse::<i64>() {
+            Ok(-1) if encoding == Encoding::Raw => -1,
+            Ok(n) if n >= 0 => n,
+            _ => {
+                return Err(IoError::invalid(
                     path,
-                    "NRRD with several data files is not supported",
+                    format!("bad NRRD 'byte skip' '{s}' (a count of bytes, or -1 for raw data)"),
                 ));
             }
-            let p = Path::new(f);
-            Some(if p.is_absolute() {
-                p.to_path_buf()
+        },
+    };
+    let line_skip: usize = match get("line skip") {
+        None => 0,
+        Some(s) => s
+            .trim()
+            .parse()
+            .map_err(|_| IoError::invalid(path, format!("bad NRRD 'line skip' '{s}'")))?,
+    };
+    if encoding == Encoding::Gzip
+        && (byte_skip as u64).saturating_add(nbytes as u64) > limits.max_bytes
+    {
+        return Err(IoError::unsupported(
+            path,
+            format!(
+                "byte skip {byte_skip} and the voxel data are more than the {} bytes a read may decompress",
+                limits.max_bytes
+            ),
+        ));
+    }
+    let data_file = get("data file").or(get("datafile")).map(str::trim);
+    if let Some(f) = data_file
+        && (f.starts_with("LIST") || f.split_whitespace().count() > 1)
+    {
+        return Err(IoError::unsupported(
+            path,
+            "NRRD with several data files is not supported",
+        ));
+    }
+    if want == Want::Header {
+        return Ok(Loaded::Header(VolumeHeader {
+            format: if data_file.is_some() {
+                Format::Nhdr
             } else {
-                path.parent().unwrap_or(Path::new(".")).join(p)
-            })
-        }
-        None => None,
-    };
-    let (mut reader, data_len): (Box<dyn BufRead>, u64) = match &data_path {
-        Some(p) => {
-            let len = std::fs::metadata(p).map_err(|e| IoError::read(p, e))?.len();
-            (Box::new(raw::open(p)?), len)
-        }
-        None => {
-            let len = std::fs::metadata(path)
-                .map_err(|e| IoError::read(path, e))?
-                .len();
-            (Box::new(r), len.saturating_sub(consumed as u64))
-        }
-    };
+                Format::Nrrd
+            },
+            geometry,
+            stored_type: t,
+            data_bytes: nbytes as u64,
+        }));
+    }
+
+    // The data stream: attached (rest of this file) or detached.
+    let (data_path, mut reader, data_len): (Option<PathBuf>, Box<dyn BufRead>, u64) =
+        match data_file {
+            Some(f) => {
+                let (p, reader, len) = src.data_file(f)?;
+                (Some(p), reader, len)
+            }
+            None => (None, r, total_len.saturating_sub(consumed as u64)),
+        };
     let data_name: &Path = data_path.as_deref().unwrap_or(path);
     let mut skipped = 0usize;
     for _ in 0..line_skip {
@@ -397,10 +462,11 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             ));
         }
     }
-    let bytes = match encoding.as_str() {
-        "raw" => {
+    let bytes = match encoding {
+        Encoding::Raw => {
             let skip_bytes = if byte_skip == -1 {
-                (data_len - skipped as u64)
+                data_len
+                    .saturating_sub(skipped as u64)
                     .checked_sub(nbytes as u64)
                     .ok_or_else(|| {
                         IoError::invalid(
@@ -424,7 +490,7 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                 .map_err(|e| IoError::read(data_name, e))?;
             raw::read_data(data_name, &mut reader, nbytes)?
         }
-        "gzip" | "gz" => {
+        Encoding::Gzip => {
             let mut dec = flate2::read::MultiGzDecoder::new(reader);
             if byte_skip > 0 {
                 std::io::copy(&mut (&mut dec).take(byte_skip as u64), &mut std::io::sink())
@@ -432,7 +498,7 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             }
             raw::read_data(data_name, &mut dec, nbytes)?
         }
-        "ascii" | "text" | "txt" => {
+        Encoding::Ascii => {
             // Each value takes at least two characters: bound the text read.
             let limit = ((geometry.len() * layers) as u64).saturating_mul(64);
             let mut text = String::new();
@@ -442,27 +508,29 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
                 .map_err(|e| IoError::read(data_name, e))?;
             ascii_to_bytes(data_name, &text, t, geometry.len() * layers)?
         }
-        other => {
-            return Err(IoError::unsupported(
-                path,
-                format!("NRRD encoding '{other}' is not supported (use raw, gzip or ascii)"),
-            ));
-        }
     };
-    let endian = if encoding.starts_with('a') || encoding.starts_with('t') {
+    let endian = if encoding == Encoding::Ascii {
         Endian::Little
     } else {
         endian
     };
     if layers == 1 {
-        return raw::decode_volume(data_name, geometry, t, endian, &bytes);
+        return raw::decode_volume(data_name, geometry, t, endian, &bytes).map(Loaded::Volume);
     }
     let mut wide = geometry.clone();
     wide.dims[0] *= layers;
     let stacked = raw::decode_volume(data_name, wide, t, endian, &bytes)?
         .to_labels()
         .map_err(|e| IoError::invalid(path, format!("segmentation layers: {e}")))?;
-    merge_layers(path, &keys, layers, stacked.data(), geometry)
+    merge_layers(path, &keys, layers, stacked.data(), geometry).map(Loaded::Volume)
+}
+
+/// The NRRD encodings read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    Raw,
+    Gzip,
+    Ascii,
 }
 
 /// One segment of a 3D Slicer segmentation: the layer it lives in and its
@@ -578,7 +646,19 @@ fn merge_layers(
 }
 
 fn ascii_to_bytes(path: &Path, text: &str, t: RawType, n: usize) -> Result<Vec<u8>, IoError> {
-    let mut out = Vec::with_capacity(n * t.size());
+    // A value takes at least two characters (a digit and a separator): a
+    // header that claims more values than the text can hold is refused
+    // before the output is allocated.
+    if n > text.len() / 2 + 1 {
+        return Err(IoError::invalid(
+            path,
+            format!(
+                "file is truncated: ASCII data of {} bytes cannot hold {n} values",
+                text.len()
+            ),
+        ));
+    }
+    let mut out = try_vec(path, n * t.size())?;
     let mut count = 0usize;
     for tok in text.split_whitespace().take(n) {
         let x: f64 = tok
@@ -623,7 +703,11 @@ pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
 
 /// Write a `.nrrd` file with extra `key:=value` lines (3D Slicer's segment
 /// table); keys and values must not hold line breaks.
-pub fn write_with_keys(path: &Path, v: &AnyVolume, keys: &[(String, String)]) -> Result<(), IoError> {
+pub fn write_with_keys(
+    path: &Path,
+    v: &AnyVolume,
+    keys: &[(String, String)],
+) -> Result<(), IoError> {
     let g = v.geometry();
     let t = RawType::of(v);
     let vec3 = |x: [f64; 3]| format!("({},{},{})", num(x[0]), num(x[1]), num(x[2]));
@@ -646,7 +730,10 @@ pub fn write_with_keys(path: &Path, v: &AnyVolume, keys: &[(String, String)]) ->
     let mut head = head;
     for (k, val) in keys {
         if k.contains(['\n', '\r']) || val.contains(['\n', '\r']) || k.contains(":=") {
-            return Err(IoError::invalid(path, format!("NRRD key '{k}' holds a line break")));
+            return Err(IoError::invalid(
+                path,
+                format!("NRRD key '{k}' holds a line break"),
+            ));
         }
         head.push_str(&format!("{k}:={val}\n"));
     }

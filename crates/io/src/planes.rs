@@ -17,6 +17,16 @@ pub enum Plane {
 }
 
 impl Plane {
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        match self {
+            Plane::U8(v) => v.len(),
+            Plane::U16(v) => v.len(),
+            Plane::I16(v) => v.len(),
+            Plane::F32(v) => v.len(),
+        }
+    }
+
     fn type_name(&self) -> &'static str {
         match self {
             Plane::U8(_) => "8-bit",
@@ -36,6 +46,11 @@ pub struct Stack {
 }
 
 impl Stack {
+    /// Number of planes pushed.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
     /// Add a plane of `width` x `height` read from `path` (named in errors).
     pub fn push(
         &mut self,
@@ -67,12 +82,26 @@ impl Stack {
                 ),
             )
         };
+        // Growing the stack may fail for lack of memory: an error, not an abort.
+        let oom = |_| IoError::unsupported(path, "not enough memory for the slices");
         match (&mut self.data, plane) {
             (None, p) => self.data = Some(p),
-            (Some(Plane::U8(d)), Plane::U8(p)) => d.extend_from_slice(&p),
-            (Some(Plane::U16(d)), Plane::U16(p)) => d.extend_from_slice(&p),
-            (Some(Plane::I16(d)), Plane::I16(p)) => d.extend_from_slice(&p),
-            (Some(Plane::F32(d)), Plane::F32(p)) => d.extend_from_slice(&p),
+            (Some(Plane::U8(d)), Plane::U8(p)) => {
+                d.try_reserve(p.len()).map_err(oom)?;
+                d.extend_from_slice(&p)
+            }
+            (Some(Plane::U16(d)), Plane::U16(p)) => {
+                d.try_reserve(p.len()).map_err(oom)?;
+                d.extend_from_slice(&p)
+            }
+            (Some(Plane::I16(d)), Plane::I16(p)) => {
+                d.try_reserve(p.len()).map_err(oom)?;
+                d.extend_from_slice(&p)
+            }
+            (Some(Plane::F32(d)), Plane::F32(p)) => {
+                d.try_reserve(p.len()).map_err(oom)?;
+                d.extend_from_slice(&p)
+            }
             (Some(a), b) => return Err(mismatch(a, &b)),
         }
         self.count += 1;

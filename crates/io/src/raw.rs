@@ -2,14 +2,11 @@
 //! (NIfTI, NRRD, MetaImage): element types, byte order, lossless
 //! conversion into [`AnyVolume`], bounded reading and atomic writing.
 use crate::IoError;
+use crate::limits::try_vec;
 use interslice_core::{AnyVolume, Geometry, Volume};
 use rayon::prelude::*;
 use std::io::{BufWriter, Read, Write};
 use std::path::Path;
-
-/// Largest volume we agree to read, in voxels (2^33: a 2048³ volume). A
-/// header that claims more is refused before any memory is allocated.
-pub const MAX_VOXELS: usize = 1 << 33;
 
 /// Byte order of a stored array.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,24 +61,6 @@ impl RawType {
     }
 }
 
-/// Check dims against [`MAX_VOXELS`] and return the byte count of the array.
-pub fn checked_bytes(path: &Path, dims: [usize; 3], t: RawType) -> Result<usize, IoError> {
-    if dims.contains(&0) {
-        return Err(IoError::invalid(path, format!("dims {dims:?} contain 0")));
-    }
-    let n = dims
-        .iter()
-        .try_fold(1usize, |a, &d| a.checked_mul(d))
-        .filter(|&n| n <= MAX_VOXELS)
-        .ok_or_else(|| {
-            IoError::unsupported(
-                path,
-                format!("dims {dims:?} are too large (more than {MAX_VOXELS} voxels)"),
-            )
-        })?;
-    Ok(n * t.size())
-}
-
 /// Read exactly `len` bytes from `r`. The buffer grows only as data arrives
 /// (at most 64 MiB is reserved ahead), so a header that lies about the size
 /// of a short file fails with "truncated" instead of allocating the lie.
@@ -90,10 +69,28 @@ pub fn read_exact_bounded<R: Read + ?Sized>(
     r: &mut R,
     len: usize,
 ) -> Result<Vec<u8>, IoError> {
-    let mut buf = Vec::with_capacity(len.min(64 << 20));
-    r.take(len as u64)
-        .read_to_end(&mut buf)
-        .map_err(|e| IoError::read(path, e))?;
+    let mut buf: Vec<u8> = Vec::new();
+    let mut filled = 0;
+    while filled < len {
+        if filled == buf.len() {
+            // Grow by doubling (64 MiB at first), never past `len`.
+            let grow = buf.len().max(64 << 20).min(len - buf.len());
+            buf.try_reserve_exact(grow).map_err(|_| {
+                IoError::unsupported(
+                    path,
+                    format!("not enough memory for {len} bytes of voxel data"),
+                )
+            })?;
+            buf.resize(buf.len() + grow, 0);
+        }
+        match r.read(&mut buf[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(IoError::read(path, e)),
+        }
+    }
+    buf.truncate(filled);
     if buf.len() < len {
         return Err(IoError::invalid(
             path,
@@ -131,22 +128,33 @@ pub fn read_data<R: Read + ?Sized>(path: &Path, r: &mut R, len: usize) -> Result
     }
 }
 
+/// Decode every N-byte element, into a vector allocated fallibly.
 fn decode<T: Send, const N: usize>(
+    path: &Path,
     bytes: &[u8],
     endian: Endian,
     f: impl Fn([u8; N]) -> T + Sync + Send,
-) -> Vec<T> {
+) -> Result<Vec<T>, IoError> {
+    let mut out = try_vec(path, bytes.len() / N)?;
+    out.par_extend(elements(bytes, endian).map(f));
+    Ok(out)
+}
+
+/// The N-byte elements of an array in native order.
+fn elements<const N: usize>(
+    bytes: &[u8],
+    endian: Endian,
+) -> impl IndexedParallelIterator<Item = [u8; N]> + '_ {
     bytes
         .par_chunks_exact(N)
         .with_min_len(1 << 14)
-        .map(|c| {
+        .map(move |c| {
             let mut a: [u8; N] = c.try_into().expect("chunk of N bytes");
             if endian == Endian::Big {
                 a.reverse();
             }
-            f(a)
+            a
         })
-        .collect()
 }
 
 /// Decode a raw array (x-fastest) into a volume, converting losslessly:
@@ -172,42 +180,54 @@ pub fn decode_volume(
         ));
     }
     let bad = |e: interslice_core::CoreError| IoError::invalid(path, e.to_string());
+    // Wide types are checked on the bytes, then converted straight into the
+    // narrow type: no wide copy of the volume is ever made.
     let v = match t {
-        RawType::U8 => AnyVolume::U8(Volume::from_vec(geometry, bytes.to_vec()).map_err(bad)?),
+        RawType::U8 => {
+            let mut data = try_vec(path, n)?;
+            data.extend_from_slice(bytes);
+            AnyVolume::U8(Volume::from_vec(geometry, data).map_err(bad)?)
+        }
         RawType::I8 => AnyVolume::I16(
             Volume::from_vec(
                 geometry,
-                decode(bytes, endian, |a: [u8; 1]| i16::from(a[0] as i8)),
+                decode(path, bytes, endian, |a: [u8; 1]| i16::from(a[0] as i8))?,
             )
             .map_err(bad)?,
         ),
         RawType::U16 => AnyVolume::U16(
-            Volume::from_vec(geometry, decode(bytes, endian, u16::from_le_bytes)).map_err(bad)?,
+            Volume::from_vec(geometry, decode(path, bytes, endian, u16::from_le_bytes)?)
+                .map_err(bad)?,
         ),
         RawType::I16 => AnyVolume::I16(
-            Volume::from_vec(geometry, decode(bytes, endian, i16::from_le_bytes)).map_err(bad)?,
+            Volume::from_vec(geometry, decode(path, bytes, endian, i16::from_le_bytes)?)
+                .map_err(bad)?,
         ),
         RawType::F32 => AnyVolume::F32(
-            Volume::from_vec(geometry, decode(bytes, endian, f32::from_le_bytes)).map_err(bad)?,
+            Volume::from_vec(geometry, decode(path, bytes, endian, f32::from_le_bytes)?)
+                .map_err(bad)?,
         ),
         RawType::U32 | RawType::I32 => {
-            let wide: Vec<i64> = if t == RawType::U32 {
-                decode(bytes, endian, |a| i64::from(u32::from_le_bytes(a)))
-            } else {
-                decode(bytes, endian, |a| i64::from(i32::from_le_bytes(a)))
+            let signed = t == RawType::I32;
+            let wide = move |a: [u8; 4]| {
+                if signed {
+                    i64::from(i32::from_le_bytes(a))
+                } else {
+                    i64::from(u32::from_le_bytes(a))
+                }
             };
-            let (lo, hi) = wide
-                .par_iter()
-                .fold(|| (i64::MAX, i64::MIN), |(l, h), &x| (l.min(x), h.max(x)))
+            let (lo, hi) = elements(bytes, endian)
+                .map(wide)
+                .fold(|| (i64::MAX, i64::MIN), |(l, h), x| (l.min(x), h.max(x)))
                 .reduce(|| (i64::MAX, i64::MIN), |a, b| (a.0.min(b.0), a.1.max(b.1)));
             if lo >= 0 && hi <= i64::from(u16::MAX) {
                 AnyVolume::U16(
-                    Volume::from_vec(geometry, wide.par_iter().map(|&x| x as u16).collect())
+                    Volume::from_vec(geometry, decode(path, bytes, endian, |a| wide(a) as u16)?)
                         .map_err(bad)?,
                 )
             } else if lo >= i64::from(i16::MIN) && hi <= i64::from(i16::MAX) {
                 AnyVolume::I16(
-                    Volume::from_vec(geometry, wide.par_iter().map(|&x| x as i16).collect())
+                    Volume::from_vec(geometry, decode(path, bytes, endian, |a| wide(a) as i16)?)
                         .map_err(bad)?,
                 )
             } else {
@@ -220,10 +240,9 @@ pub fn decode_volume(
             }
         }
         RawType::F64 => {
-            let wide: Vec<f64> = decode(bytes, endian, f64::from_le_bytes);
-            if wide
-                .par_iter()
-                .any(|&x| f64::from(x as f32) != x && !x.is_nan())
+            if elements(bytes, endian)
+                .map(f64::from_le_bytes)
+                .any(|x| f64::from(x as f32) != x && !x.is_nan())
             {
                 return Err(IoError::unsupported(
                     path,
@@ -231,8 +250,11 @@ pub fn decode_volume(
                 ));
             }
             AnyVolume::F32(
-                Volume::from_vec(geometry, wide.par_iter().map(|&x| x as f32).collect())
-                    .map_err(bad)?,
+                Volume::from_vec(
+                    geometry,
+                    decode(path, bytes, endian, |a| f64::from_le_bytes(a) as f32)?,
+                )
+                .map_err(bad)?,
             )
         }
     };

@@ -9,12 +9,15 @@
 //! and direction, which TIFF cannot hold, are kept in two extra description
 //! keys (`interslice.origin=`, `interslice.direction=`) that ImageJ ignores.
 //! Written uncompressed (what every ImageJ version opens).
-use crate::IoError;
+use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want};
 use crate::planes::{Plane, Stack, resolution_rational, unit_with_scale};
-use crate::raw::{self, MAX_VOXELS};
+use crate::raw::{self, RawType};
+use crate::source::Source;
+use crate::{Format, IoError};
 use interslice_core::geometry::IDENTITY_DIRECTION;
 use interslice_core::{AnyVolume, Geometry, LengthUnit};
 use std::collections::HashMap;
+use std::io::{Cursor, Read, Seek};
 use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::encoder::{Rational, TiffEncoder, TiffKind};
@@ -32,22 +35,103 @@ fn tiff_err(path: &Path, e: TiffError) -> IoError {
     }
 }
 
-/// Read the current page of a decoder as a gray plane.
-pub fn read_page<R: std::io::Read + std::io::Seek>(
+/// Most bytes a tag value may hold (an `ImageDescription`, a strip offset
+/// table): the decoder's limit while it reads tags, so a tag count of
+/// 0xFFFFFFFF is an error, not a 4 GiB allocation.
+const TAG_BYTES: usize = 16 << 20;
+
+/// Most a compressed TIFF page is taken to expand (LZW codes of 12 bits
+/// give at most 4096 bytes each): a page header that claims more than its
+/// file could hold is refused before its buffer is allocated.
+const MAX_EXPANSION: u64 = 4096;
+
+fn limits_of(decoding_buffer_size: usize) -> Limits {
+    let mut l = Limits::default();
+    l.decoding_buffer_size = decoding_buffer_size;
+    l.intermediate_buffer_size = decoding_buffer_size.min(1 << 30);
+    l
+}
+
+/// A decoder whose tag values are bounded by [`TAG_BYTES`].
+pub(crate) fn decoder<R: Read + Seek>(path: &Path, r: R) -> Result<Decoder<R>, IoError> {
+    Ok(Decoder::new(r)
+        .map_err(|e| tiff_err(path, e))?
+        .with_limits(limits_of(TAG_BYTES)))
+}
+
+/// Size and stored element type of the current page (gray only).
+pub(crate) fn page_header<R: Read + Seek>(
     path: &Path,
     d: &mut Decoder<R>,
-) -> Result<(usize, usize, Plane), IoError> {
+) -> Result<(usize, usize, RawType), IoError> {
     let (w, h) = d.dimensions().map_err(|e| tiff_err(path, e))?;
-    match d.colortype().map_err(|e| tiff_err(path, e))? {
-        ColorType::Gray(_) => {}
+    let bits = match d.colortype().map_err(|e| tiff_err(path, e))? {
+        ColorType::Gray(b) => b,
         other => {
             return Err(IoError::unsupported(
                 path,
                 format!("TIFF colour type {other:?} is not supported (gray images only)"),
             ));
         }
+    };
+    let format = d
+        .find_tag_unsigned::<u16>(Tag::SampleFormat)
+        .map_err(|e| tiff_err(path, e))?
+        .unwrap_or(1);
+    let t = match (bits, format) {
+        (8, 1) => RawType::U8,
+        (8, 2) => RawType::I8,
+        (16, 1) => RawType::U16,
+        (16, 2) => RawType::I16,
+        (32, 3) => RawType::F32,
+        _ => {
+            return Err(IoError::unsupported(
+                path,
+                format!(
+                    "TIFF sample type of {bits} bits (format {format}) is not supported (8/16-bit integer or 32-bit float only)"
+                ),
+            ));
+        }
+    };
+    Ok((w as usize, h as usize, t))
+}
+
+/// Read the current page (whose header is `w` x `h` of `t`) as a gray
+/// plane. `file_len` bounds what the page may need: no more than the file
+/// holds (uncompressed) or [`MAX_EXPANSION`] times it (compressed).
+pub(crate) fn read_page<R: Read + Seek>(
+    path: &Path,
+    d: Decoder<R>,
+    (w, h, t): (usize, usize, RawType),
+    file_len: u64,
+) -> Result<(Decoder<R>, Plane), IoError> {
+    let mut d = d;
+    let bytes = (w as u64)
+        .saturating_mul(h as u64)
+        .saturating_mul(t.size() as u64);
+    let compression = d
+        .find_tag_unsigned::<u16>(Tag::Compression)
+        .map_err(|e| tiff_err(path, e))?
+        .unwrap_or(1);
+    let most = if compression == 1 {
+        file_len
+    } else {
+        file_len.saturating_mul(MAX_EXPANSION)
+    };
+    if bytes > most {
+        return Err(IoError::invalid(
+            path,
+            format!("TIFF page of {w} x {h} needs {bytes} bytes, more than the file can hold"),
+        ));
     }
-    let plane = match d.read_image().map_err(|e| tiff_err(path, e))? {
+    let page =
+        usize::try_from(bytes).map_err(|_| IoError::unsupported(path, "TIFF page is too large"))?;
+    // The decoder allocates the page itself: allow exactly that much, then
+    // go back to the tag limit.
+    d = d.with_limits(limits_of(page.max(TAG_BYTES)));
+    let result = d.read_image().map_err(|e| tiff_err(path, e));
+    d = d.with_limits(limits_of(TAG_BYTES));
+    let plane = match result? {
         DecodingResult::U8(v) => Plane::U8(v),
         DecodingResult::U16(v) => Plane::U16(v),
         DecodingResult::I16(v) => Plane::I16(v),
@@ -60,13 +144,17 @@ pub fn read_page<R: std::io::Read + std::io::Seek>(
             ));
         }
     };
-    Ok((w as usize, h as usize, plane))
+    if plane.len() != w * h {
+        return Err(IoError::invalid(
+            path,
+            format!("TIFF page of {w} x {h} decoded to {} samples", plane.len()),
+        ));
+    }
+    Ok((d, plane))
 }
 
 /// The `key=value` lines of an ImageJ description, or None.
-fn imagej_description<R: std::io::Read + std::io::Seek>(
-    d: &mut Decoder<R>,
-) -> Option<HashMap<String, String>> {
+fn imagej_description<R: Read + Seek>(d: &mut Decoder<R>) -> Option<HashMap<String, String>> {
     let s = d.get_tag_ascii_string(Tag::ImageDescription).ok()?;
     if !s.starts_with("ImageJ=") {
         return None;
@@ -79,15 +167,30 @@ fn imagej_description<R: std::io::Read + std::io::Seek>(
     )
 }
 
-fn rational<R: std::io::Read + std::io::Seek>(d: &mut Decoder<R>, tag: Tag) -> Option<f64> {
-    match d.find_tag(tag).ok()?? {
-        tiff::decoder::ifd::Value::Rational(n, den) if n > 0 && den > 0 => {
-            Some(f64::from(n) / f64::from(den))
-        }
-        tiff::decoder::ifd::Value::Float(f) if f > 0.0 => Some(f64::from(f)),
-        tiff::decoder::ifd::Value::Double(f) if f > 0.0 => Some(f),
-        _ => None,
+/// A resolution tag in pixels per unit: `None` when absent, an error when
+/// present but not a positive finite number.
+fn resolution<R: Read + Seek>(
+    path: &Path,
+    d: &mut Decoder<R>,
+    tag: Tag,
+) -> Result<Option<f64>, IoError> {
+    let v = match d.find_tag(tag).map_err(|e| tiff_err(path, e))? {
+        None => return Ok(None),
+        Some(v) => v,
+    };
+    let x = match v {
+        tiff::decoder::ifd::Value::Rational(n, den) if den > 0 => f64::from(n) / f64::from(den),
+        tiff::decoder::ifd::Value::Float(f) => f64::from(f),
+        tiff::decoder::ifd::Value::Double(f) => f,
+        _ => f64::NAN,
+    };
+    if !(x.is_finite() && x > 0.0 && (1.0 / x).is_finite()) {
+        return Err(IoError::invalid(
+            path,
+            format!("{tag:?} {x} is not a positive resolution (voxel spacing would be invalid)"),
+        ));
     }
+    Ok(Some(x))
 }
 
 fn parse3(s: &str) -> Option<[f64; 3]> {
@@ -99,7 +202,13 @@ fn parse3(s: &str) -> Option<[f64; 3]> {
 }
 
 /// Spacing, unit, origin and direction of the first page (dims left 1).
-pub(crate) fn geometry_of<R: std::io::Read + std::io::Seek>(d: &mut Decoder<R>) -> Geometry {
+/// Without an ImageJ description the file has no spacing: 1 and an unknown
+/// unit. With one, a resolution or `spacing=` that is zero, negative or
+/// not a number is an error.
+pub(crate) fn geometry_of<R: Read + Seek>(
+    path: &Path,
+    d: &mut Decoder<R>,
+) -> Result<Geometry, IoError> {
     let mut g = Geometry {
         dims: [1; 3],
         spacing: [1.0; 3],
@@ -108,64 +217,77 @@ pub(crate) fn geometry_of<R: std::io::Read + std::io::Seek>(d: &mut Decoder<R>) 
         direction: IDENTITY_DIRECTION,
     };
     let Some(desc) = imagej_description(d) else {
-        return g;
+        return Ok(g);
     };
     let (unit, scale) = desc
         .get("unit")
         .map(|u| unit_with_scale(u))
         .unwrap_or((LengthUnit::Unknown, 1.0));
     g.unit = unit;
-    let valid = |x: f64| x.is_finite() && x > 0.0;
-    if let Some(x) = rational(d, Tag::XResolution).filter(|&x| valid(1.0 / x)) {
+    if let Some(x) = resolution(path, d, Tag::XResolution)? {
         g.spacing[0] = scale / x;
     }
-    g.spacing[1] = match rational(d, Tag::YResolution).filter(|&y| valid(1.0 / y)) {
+    g.spacing[1] = match resolution(path, d, Tag::YResolution)? {
         Some(y) => scale / y,
         None => g.spacing[0],
     };
-    if let Some(z) = desc
-        .get("spacing")
-        .and_then(|s| s.parse::<f64>().ok())
-        .filter(|&z| valid(z))
-    {
-        g.spacing[2] = z.abs() * scale;
-    } else {
-        g.spacing[2] = g.spacing[0];
+    g.spacing[2] = match desc.get("spacing") {
+        Some(s) => match s.parse::<f64>() {
+            Ok(z) if z.is_finite() && z > 0.0 => z * scale,
+            _ => {
+                return Err(IoError::invalid(
+                    path,
+                    format!("ImageJ spacing={s} is not a positive number"),
+                ));
+            }
+        },
+        None => g.spacing[0],
+    };
+    if let Some(o) = desc.get("interslice.origin") {
+        g.origin = parse3(o)
+            .ok_or_else(|| IoError::invalid(path, format!("bad interslice.origin={o}")))?;
     }
-    if let Some(o) = desc.get("interslice.origin").and_then(|s| parse3(s)) {
-        g.origin = o;
-    }
-    if let Some(dir) = desc.get("interslice.direction").and_then(|s| {
-        let v: Vec<f64> = s
+    if let Some(s) = desc.get("interslice.direction") {
+        let dir = s
             .split(',')
             .map(|x| x.trim().parse().ok())
-            .collect::<Option<_>>()?;
-        <[f64; 9]>::try_from(v).ok()
-    }) {
+            .collect::<Option<Vec<f64>>>()
+            .and_then(|v| <[f64; 9]>::try_from(v).ok())
+            .ok_or_else(|| IoError::invalid(path, format!("bad interslice.direction={s}")))?;
         g.direction = [
             [dir[0], dir[1], dir[2]],
             [dir[3], dir[4], dir[5]],
             [dir[6], dir[7], dir[8]],
         ];
     }
-    g
+    crate::header::checked(path, g)
 }
 
-/// Open a TIFF decoder with limits that allow large pages but not absurd ones.
-pub fn decoder(path: &Path) -> Result<Decoder<std::io::BufReader<std::fs::File>>, IoError> {
-    let f = raw::open(path)?;
-    let mut limits = Limits::default();
-    limits.decoding_buffer_size = MAX_VOXELS.min(usize::MAX / 4);
-    limits.intermediate_buffer_size = 1 << 30;
-    Ok(Decoder::new(f)
-        .map_err(|e| tiff_err(path, e))?
-        .with_limits(limits))
+/// Read a multi-page TIFF (a file or bytes) as a volume.
+pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoError> {
+    match src.bytes {
+        Some(b) => read_from(src.name, Cursor::new(b), b.len() as u64, limits, want),
+        None => {
+            let f = raw::open(src.name)?;
+            let len = f
+                .get_ref()
+                .metadata()
+                .map_err(|e| IoError::read(src.name, e))?
+                .len();
+            read_from(src.name, f, len, limits, want)
+        }
+    }
 }
 
-/// Read a multi-page TIFF as a volume.
-pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
-    let mut d = decoder(path)?;
-    let mut g = geometry_of(&mut d);
+fn read_from<R: Read + Seek>(
+    path: &Path,
+    r: R,
+    file_len: u64,
+    limits: &ReadLimits,
+    want: Want,
+) -> Result<Loaded, IoError> {
+    let mut d = decoder(path, r)?;
+    let mut g = geometry_of(path, &mut d)?;
     if let Some(desc) = imagej_description(&mut d) {
         for key in ["channels", "frames"] {
             if let Some(n) = desc.get(key).and_then(|s| s.parse::<u64>().ok())
@@ -178,22 +300,72 @@ pub fn read(path: &Path) -> Result<AnyVolume, IoError> {
             }
         }
     }
-    let mut stack = Stack::default();
-    let mut voxels = 0usize;
-    loop {
-        let (w, h, plane) = read_page(path, &mut d)?;
-        voxels = voxels.saturating_add(w * h);
-        if voxels > MAX_VOXELS {
-            return Err(IoError::unsupported(path, "TIFF stack is too large"));
+    let first = page_header(path, &mut d)?;
+    let (w, h, t) = first;
+    let page_voxels = (w as u64).saturating_mul(h as u64);
+    // Pages are counted (their directories only) up to what the limits allow.
+    let most_pages = match limits.expected_dims {
+        Some(e) => e[2] as u64,
+        None => limits.max_voxels / page_voxels.max(1),
+    };
+    let check = |pages: usize| {
+        let bytes = page_voxels
+            .saturating_mul(pages as u64)
+            .saturating_mul(t.size() as u64);
+        limits.check(path, [w, h, pages], bytes)
+    };
+    if want == Want::Header {
+        let mut pages = 1usize;
+        while d.more_images() {
+            if pages as u64 >= most_pages {
+                check(pages + 1)?;
+                return Err(IoError::unsupported(path, "TIFF has too many pages"));
+            }
+            d.next_image().map_err(|e| tiff_err(path, e))?;
+            pages += 1;
         }
+        check(pages)?;
+        g.dims = [w, h, pages];
+        return Ok(Loaded::Header(VolumeHeader {
+            format: Format::Tiff,
+            geometry: g,
+            stored_type: t,
+            data_bytes: page_voxels * pages as u64 * t.size() as u64,
+        }));
+    }
+    // The page size (and the page count the caller expects) is checked
+    // before the first page is decoded.
+    check(limits.expected_dims.map_or(1, |e| e[2]))?;
+    let mut stack = Stack::default();
+    let mut header = first;
+    loop {
+        if header != first {
+            return Err(IoError::invalid(
+                path,
+                format!(
+                    "page {} is {} x {} {:?} but the first is {w} x {h} {t:?} (all pages must have one size and type)",
+                    stack.len(),
+                    header.0,
+                    header.1,
+                    header.2
+                ),
+            ));
+        }
+        if stack.len() as u64 >= most_pages {
+            check(stack.len() + 1)?;
+        }
+        let (next, plane) = read_page(path, d, header, file_len)?;
+        d = next;
         stack.push(path, w, h, plane)?;
         if !d.more_images() {
             break;
         }
         d.next_image().map_err(|e| tiff_err(path, e))?;
+        header = page_header(path, &mut d)?;
     }
+    check(stack.len())?;
     g.dims = [1; 3];
-    stack.finish(path, g)
+    stack.finish(path, g).map(Loaded::Volume)
 }
 
 fn imagej_unit(u: LengthUnit) -> &'static str {

@@ -1309,17 +1309,18 @@ async fn upload_segmentation(
 ) -> Result<Response, ApiError> {
     let body = body.map_err(crate::error::body_rejection)?;
     let rel = crate::limits::upload_name(&q.name)?;
+    interslice_io::Format::of_name(&rel)?;
     if body.is_empty() {
         return Err(ApiError::bad_request("the uploaded file is empty"));
     }
     let c = state.cell(&cell).await?;
     let st = state.clone();
     let info = blocking(move || {
-        // The readers take paths: the upload goes through a private temp folder.
-        let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
-        let path = dir.path().join(&rel);
-        std::fs::write(&path, &body).map_err(|e| ApiError::internal(e.to_string()))?;
-        let labels = interslice_io::read_labels(&path)?;
+        // Read from memory: self-contained formats only (no detached data
+        // file), the header checked against the cell's grid before any voxel
+        // data is decompressed.
+        let limits = interslice_io::ReadLimits::for_grid(c.volume.geometry().dims);
+        let labels = interslice_io::read_labels_bytes(&q.name, &body, &limits)?;
         labels
             .geometry()
             .ensure_same_grid(c.volume.geometry())

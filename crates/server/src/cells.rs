@@ -227,9 +227,24 @@ pub fn le_bytes(v: &AnyVolume, range: std::ops::Range<usize>) -> Vec<u8> {
 
 impl LoadedCell {
     /// Read a cell and compute its range, histogram and content hash.
-    pub fn load(path: &Path) -> Result<LoadedCell, interslice_io::IoError> {
-        let volume = interslice_io::read_volume(path)?;
-        Ok(Self::from_volume(volume))
+    /// Every allocation the file's header asks for is checked by the reader
+    /// (the default [`interslice_io::ReadLimits`]); a reader that panics
+    /// all the same makes this cell's error, never the server's end.
+    pub fn load(path: &Path) -> Result<LoadedCell, ApiError> {
+        let read = std::panic::catch_unwind(|| {
+            interslice_io::read_volume_with(path, &interslice_io::ReadLimits::default())
+        });
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match read {
+            Ok(Ok(volume)) => Ok(Self::from_volume(volume)),
+            Ok(Err(e)) => Err(ApiError::from(e)),
+            Err(_) => Err(ApiError::internal(format!(
+                "cell file {name} cannot be read (the reader failed)"
+            ))),
+        }
     }
 
     /// Wrap a volume already in memory.
