@@ -35,9 +35,11 @@ export interface Cell {
   unit: string;
   /** Voxel type of the volume (also the slices'). */
   dtype: Dtype;
-  status: "not_started" | "in_progress" | "done";
+  status: "not_started" | "in_progress" | "done" | "unreadable";
   /** Seconds this user spent tracing it. */
   seconds: number;
+  /** Why the file cannot be read (status "unreadable"); such a cell cannot be opened. */
+  error?: string;
 }
 
 /** A label (component). */

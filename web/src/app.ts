@@ -8,7 +8,7 @@ import { h, hms } from "./dom";
 import { Outbox } from "./queue";
 import { Tracer } from "./tracer";
 
-const STATUS_TEXT: Record<Cell["status"], string> = { not_started: "not started", in_progress: "in progress", done: "done" };
+const STATUS_TEXT: Record<Cell["status"], string> = { not_started: "not started", in_progress: "in progress", done: "done", unreadable: "cannot be read" };
 
 /** The app. */
 export class App {
@@ -137,8 +137,13 @@ export class App {
       }
       list.replaceChildren(
         h("thead", {}, h("tr", {}, h("th", {}, "Cell"), h("th", {}, "Size (voxels)"), h("th", {}, "Voxel"), h("th", {}, "Type"), h("th", {}, "Your status"), h("th", {}, "Time spent"), h("th", {}))),
-        h("tbody", {}, ...cells.map((c) =>
-          h("tr", { "data-cell": c.id, class: `st-${c.status}` },
+        h("tbody", {}, ...cells.map((c) => c.error !== undefined
+          ? h("tr", { "data-cell": c.id, class: "st-unreadable" },
+            h("td", {}, c.name || c.id),
+            h("td", { colspan: 3, class: "err", testid: `cell-error-${c.id}` }, c.error),
+            h("td", {}, h("span", { class: "badge unreadable" }, STATUS_TEXT.unreadable)),
+            h("td", {}), h("td", {}))
+          : h("tr", { "data-cell": c.id, class: `st-${c.status}` },
             h("td", {}, h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, testid: `open-cell-${c.id}` }, c.name || c.id)),
             h("td", {}, c.dims.join(" × ")),
             h("td", {}, `${c.spacing.map((s) => +s.toPrecision(3)).join(" × ")} ${c.unit}`),

@@ -208,10 +208,15 @@ pub struct CellSummary {
     pub unit: String,
     /// "u8", "u16" (or "i16", "f32" for volumes that bring them).
     pub dtype: String,
-    /// "not_started", "in_progress" or "done" for the signed-in user.
+    /// "not_started", "in_progress" or "done" for the signed-in user;
+    /// "unreadable" when the file cannot be read (see `error`).
     pub status: String,
     /// Seconds the user spent tracing it.
     pub seconds: f64,
+    /// Why the cell's file cannot be read (then `dims` are 0 and the cell
+    /// cannot be opened); absent for a readable cell.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -255,6 +260,7 @@ async fn summary(
         dtype,
         status: status.as_str().to_string(),
         seconds: state.store.time_spent(id, user.id)?,
+        error: None,
     })
 }
 
@@ -286,8 +292,32 @@ async fn list_cells(
                 }
                 out.push(s)
             }
-            // A file that cannot be read is not offered for tracing.
-            Err(e) => eprintln!("warning: skipping cell '{id}': {}", e.message),
+            // A file that cannot be read is listed with its reason (it
+            // cannot be opened), so the project's owner sees what to fix.
+            Err(e) => {
+                if q.queue == Some(true) {
+                    continue;
+                }
+                let name = state
+                    .cells
+                    .read()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .get(&id)
+                    .and_then(|p| p.file_name())
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                out.push(CellSummary {
+                    id,
+                    name,
+                    dims: [0; 3],
+                    spacing: [0.0; 3],
+                    unit: String::new(),
+                    dtype: String::new(),
+                    status: "unreadable".into(),
+                    seconds: 0.0,
+                    error: Some(e.message),
+                });
+            }
         }
     }
     Ok(Json(out))

@@ -105,7 +105,23 @@ fn a_corrupt_slice_is_the_cells_error_not_the_servers_end() {
     std::fs::write(&p, b).unwrap();
     let server = serve(config(dir.path()));
     let c = signed_in(&server, "alice");
-    expect(&c.get("/api/cells").unwrap(), 200);
+    let list = c.get("/api/cells").unwrap();
+    expect(&list, 200);
+    // Listed with its reason, not dropped and not fatal.
+    let cells = list.json();
+    let bad = cells
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["id"] == "bad")
+        .expect("the unreadable cell is listed");
+    assert_eq!(bad["status"], "unreadable");
+    assert!(
+        bad["error"].as_str().unwrap().contains("slice_0001.png"),
+        "{bad}"
+    );
+    let queue = c.get("/api/cells?queue=true").unwrap().json();
+    assert!(queue.as_array().unwrap().iter().all(|c| c["id"] != "bad"));
     let a = c.get("/api/cells/bad").unwrap();
     expect(&a, 400);
     assert!(
