@@ -4,6 +4,7 @@
 
 mod cmd;
 mod progress;
+mod series;
 
 use clap::{Parser, Subcommand};
 

@@ -9,12 +9,14 @@ use std::path::PathBuf;
 /// Arguments of `convert`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The volume file or slice folder to read.
+    /// The volume file, slice folder or DICOM folder to read.
     pub input: PathBuf,
     /// The file or folder to write; its extension picks the format (.nii,
     /// .nii.gz, .nrrd, .mha, .mhd, .tif; a folder, or a name without an
     /// extension, for PNG slices).
     pub output: PathBuf,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
     /// Store the volume as labels: integer values 0..=65535, written as u8
     /// when the largest is at most 255, else u16 (fails on other values).
     #[arg(long)]
@@ -27,7 +29,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Format::of_path(&args.input)?;
     let out_format = Format::of_path(&args.output)?;
     if args.labels {
-        let v = interslice_io::read_labels(&args.input)?;
+        let v = args.series.read_labels(&args.input)?;
         interslice_io::write_labels(&args.output, &v)?;
         let n = v.label_counts().len();
         let [nx, ny, nz] = v.dims();
@@ -38,7 +40,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let v = interslice_io::read_volume(&args.input)?;
+    let v = args.series.read_volume(&args.input)?;
     interslice_io::write_volume(&args.output, &v).with_context(|| {
         format!(
             "cannot convert {} ({}) to {}",
@@ -77,6 +79,7 @@ mod tests {
             input: input.to_path_buf(),
             output: output.to_path_buf(),
             labels,
+            series: Default::default(),
         })
     }
 
