@@ -27,29 +27,61 @@ fn write_series(dir: &Path) {
         let mut put = |tag, vr, v| {
             o.put(DataElement::new(tag, vr, v));
         };
-        put(tags::SOP_CLASS_UID, VR::UI, PrimitiveValue::from("1.2.840.10008.5.1.4.1.1.2"));
-        put(tags::SOP_INSTANCE_UID, VR::UI, PrimitiveValue::from(format!("1.2.3.4.{k}")));
-        put(tags::SERIES_INSTANCE_UID, VR::UI, PrimitiveValue::from("1.2.3.4"));
+        put(
+            tags::SOP_CLASS_UID,
+            VR::UI,
+            PrimitiveValue::from("1.2.840.10008.5.1.4.1.1.2"),
+        );
+        put(
+            tags::SOP_INSTANCE_UID,
+            VR::UI,
+            PrimitiveValue::from(format!("1.2.3.4.{k}")),
+        );
+        put(
+            tags::SERIES_INSTANCE_UID,
+            VR::UI,
+            PrimitiveValue::from("1.2.3.4"),
+        );
         put(tags::MODALITY, VR::CS, PrimitiveValue::from("CT"));
         let z = 1.25 * k as f64;
-        put(tags::IMAGE_POSITION_PATIENT, VR::DS, ds(&[-160.0, -160.0 - z * s, z * c]));
-        put(tags::IMAGE_ORIENTATION_PATIENT, VR::DS, ds(&[1.0, 0.0, 0.0, 0.0, c, s]));
+        put(
+            tags::IMAGE_POSITION_PATIENT,
+            VR::DS,
+            ds(&[-160.0, -160.0 - z * s, z * c]),
+        );
+        put(
+            tags::IMAGE_ORIENTATION_PATIENT,
+            VR::DS,
+            ds(&[1.0, 0.0, 0.0, 0.0, c, s]),
+        );
         put(tags::PIXEL_SPACING, VR::DS, ds(&[0.625, 0.625]));
         put(tags::SAMPLES_PER_PIXEL, VR::US, PrimitiveValue::from(1u16));
-        put(tags::PHOTOMETRIC_INTERPRETATION, VR::CS, PrimitiveValue::from("MONOCHROME2"));
+        put(
+            tags::PHOTOMETRIC_INTERPRETATION,
+            VR::CS,
+            PrimitiveValue::from("MONOCHROME2"),
+        );
         put(tags::ROWS, VR::US, PrimitiveValue::from(N as u16));
         put(tags::COLUMNS, VR::US, PrimitiveValue::from(N as u16));
         put(tags::BITS_ALLOCATED, VR::US, PrimitiveValue::from(16u16));
         put(tags::BITS_STORED, VR::US, PrimitiveValue::from(16u16));
         put(tags::HIGH_BIT, VR::US, PrimitiveValue::from(15u16));
-        put(tags::PIXEL_REPRESENTATION, VR::US, PrimitiveValue::from(1u16));
+        put(
+            tags::PIXEL_REPRESENTATION,
+            VR::US,
+            PrimitiveValue::from(1u16),
+        );
         put(tags::RESCALE_SLOPE, VR::DS, ds(&[1.0]));
         put(tags::RESCALE_INTERCEPT, VR::DS, ds(&[-1024.0]));
         let pixels: Vec<u16> = (0..N * N)
             .map(|i| {
                 let (x, y) = ((i % N) as f64 - 256.0, (i / N) as f64 - 256.0);
                 let inside = x * x + y * y < 200.0 * 200.0;
-                (if inside { 1064 + (i * 7 + k) % 40 } else { (i * 13) % 20 }) as u16
+                (if inside {
+                    1064 + (i * 7 + k) % 40
+                } else {
+                    (i * 13) % 20
+                }) as u16
             })
             .collect();
         put(tags::PIXEL_DATA, VR::OW, PrimitiveValue::U16(pixels.into()));
@@ -57,7 +89,8 @@ fn write_series(dir: &Path) {
             .with_meta(FileMetaTableBuilder::new().transfer_syntax("1.2.840.10008.1.2.1"))
             .unwrap();
         // Names that do not sort in slice order.
-        file.write_to_file(dir.join(format!("IM{:04}", (k * 37) % 101))).unwrap();
+        file.write_to_file(dir.join(format!("IM{:04}", (k * 37) % 101)))
+            .unwrap();
     }
 }
 

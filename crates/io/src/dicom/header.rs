@@ -108,11 +108,13 @@ pub(crate) fn has_dicm_magic(path: &Path) -> bool {
 /// Largest DICOM file we read into memory.
 const MAX_FILE_BYTES: u64 = 1 << 34;
 
-/// The bytes of a DICOM file, after checking that no element (in the meta
-/// group, the data set, its sequences and pixel fragments) claims more bytes
-/// than the file has left. The parser reserves an element's declared length
-/// before reading it, so without this check a few corrupt bytes could make
-/// it allocate up to 4 GiB per element.
+/// The bytes of a DICOM file up to the end of its pixel data, after checking
+/// that no element (in the meta group, the data set, its sequences and pixel
+/// fragments) claims more bytes than the file has left. The parser reserves
+/// an element's declared length before reading it, so without this check a
+/// few corrupt bytes could make it allocate up to 4 GiB per element. What
+/// follows the pixel data (padding, trailing bytes some scanners leave) is
+/// cut off: the parser would choke on it.
 pub(crate) fn load(path: &Path) -> Result<Vec<u8>, IoError> {
     let len = std::fs::metadata(path)
         .map_err(|e| IoError::read(path, e))?
@@ -123,14 +125,16 @@ pub(crate) fn load(path: &Path) -> Result<Vec<u8>, IoError> {
             format!("DICOM file of {len} bytes is larger than {MAX_FILE_BYTES}"),
         ));
     }
-    let bytes = std::fs::read(path).map_err(|e| IoError::read(path, e))?;
+    let mut bytes = std::fs::read(path).map_err(|e| IoError::read(path, e))?;
     if bytes.len() < 132 || &bytes[128..132] != b"DICM" {
         return Err(IoError::invalid(
             path,
             "not a DICOM file (no DICM preamble)",
         ));
     }
-    check_lengths(&bytes).map_err(|e| IoError::invalid(path, format!("bad DICOM file: {e}")))?;
+    let data_end = check_lengths(&bytes)
+        .map_err(|e| IoError::invalid(path, format!("bad DICOM file: {e}")))?;
+    bytes.truncate(data_end);
     Ok(bytes)
 }
 
@@ -152,8 +156,9 @@ pub(crate) fn parse(
 }
 
 /// Walk every element header (values skipped, nothing allocated) and err
-/// when a defined length runs past the end of the data.
-fn check_lengths(bytes: &[u8]) -> Result<(), String> {
+/// when a defined length runs past the end of the data; returns where the
+/// last PixelData element ends (the end of the bytes when there is none).
+fn check_lengths(bytes: &[u8]) -> Result<usize, String> {
     use dicom_core::VR;
     use dicom_encoding::decode::Decode;
     use dicom_encoding::decode::explicit_le::ExplicitVRLittleEndianDecoder;
@@ -190,22 +195,25 @@ fn check_lengths(bytes: &[u8]) -> Result<(), String> {
     }
     let Some(ts) = TransferSyntaxRegistry.get(&ts_uid) else {
         // Reported as an unknown transfer syntax by the parser.
-        return Ok(());
+        return Ok(end);
     };
     // A deflated data set cannot be walked in its stored form; its size is
     // bounded by the inflated stream, which the parser reads as it goes.
     if !(ts.is_codec_free() || ts.is_encapsulated_pixel_data()) {
-        return Ok(());
+        return Ok(end);
     }
     let Some(decoder) = ts.decoder() else {
-        return Ok(());
+        return Ok(end);
     };
     let mut in_fragments = false;
+    let mut data_end = None;
     while pos < end {
         let mut cur = &bytes[pos..];
-        let (h, _) = decoder
-            .decode_header(&mut cur as &mut dyn Read)
-            .map_err(|e| format!("at byte {pos}: {e}"))?;
+        // A header that does not decode is the parser's to report (or to
+        // ignore, as trailing bytes after the data set often are).
+        let Ok((h, _)) = decoder.decode_header(&mut cur as &mut dyn Read) else {
+            return Ok(data_end.unwrap_or(end));
+        };
         pos = end - cur.len();
         let Some(n) = h.length().get() else {
             // A sequence, an item or encapsulated pixel data: its content
@@ -214,8 +222,9 @@ fn check_lengths(bytes: &[u8]) -> Result<(), String> {
             continue;
         };
         let is_item = h.tag == Tag(0xFFFE, 0xE000);
-        if h.tag == Tag(0xFFFE, 0xE0DD) {
+        if h.tag == Tag(0xFFFE, 0xE0DD) && in_fragments {
             in_fragments = false;
+            data_end = Some(pos);
         }
         if (is_item && !in_fragments) || (!is_item && h.vr == VR::SQ) {
             continue;
@@ -229,8 +238,11 @@ fn check_lengths(bytes: &[u8]) -> Result<(), String> {
             ));
         }
         pos += n;
+        if h.tag == tags::PIXEL_DATA {
+            data_end = Some(pos);
+        }
     }
-    Ok(())
+    Ok(data_end.unwrap_or(end))
 }
 
 /// Read the header of a DICOM file. `Ok(None)` for a DICOM object that is
