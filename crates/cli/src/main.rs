@@ -5,6 +5,7 @@
 mod cmd;
 mod label;
 mod progress;
+mod series;
 
 use clap::{Parser, Subcommand};
 

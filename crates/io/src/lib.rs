@@ -1,4 +1,5 @@
-//! Volume and mesh file formats: NIfTI, NRRD, MetaImage, TIFF stacks and slice folders.
+//! Volume and mesh file formats: NIfTI, NRRD, MetaImage, TIFF stacks, slice
+//! folders and DICOM series (read only).
 //!
 //! [`read_volume`] and [`write_volume`] pick the format from the path (see
 //! [`Format::of_path`]); geometry (dims, spacing, unit, origin, direction) is
@@ -8,6 +9,7 @@
 //! formats and their conventions are documented in `docs/formats.md`.
 #![deny(missing_docs)]
 
+pub mod dicom;
 pub mod error;
 pub mod limits;
 pub mod mesh;
@@ -52,14 +54,21 @@ pub enum Format {
     Tiff,
     /// A folder of 2D PNG or TIFF slices (written as `slice_0000.png`, ...).
     SliceFolder,
+    /// A folder of DICOM files, or one DICOM file (read only; see [`dicom`]).
+    Dicom,
 }
 
 impl Format {
-    /// The format of a path: by extension (case-insensitive), or
-    /// [`Format::SliceFolder`] for an existing directory, a path ending in
-    /// `/`, or a path that does not exist and whose name has no extension.
+    /// The format of a path: by extension (case-insensitive); [`Format::Dicom`]
+    /// for a directory holding DICOM files, a `.dcm` file or an existing file
+    /// that starts with the DICOM preamble; [`Format::SliceFolder`] for
+    /// another existing directory, a path ending in `/`, or a path that does
+    /// not exist and whose name has no extension.
     pub fn of_path(path: &Path) -> Result<Format, IoError> {
         let text = path.to_string_lossy();
+        if path.is_dir() && dicom::is_dicom_folder(path) {
+            return Ok(Format::Dicom);
+        }
         if path.is_dir() || text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
             return Ok(Format::SliceFolder);
         }
@@ -94,10 +103,12 @@ impl Format {
             Ok(Format::Mhd)
         } else if name.ends_with(".tif") || name.ends_with(".tiff") {
             Ok(Format::Tiff)
+        } else if name.ends_with(".dcm") || (path.is_file() && dicom::is_dicom_file(path)) {
+            Ok(Format::Dicom)
         } else {
             Err(IoError::unsupported(
                 path,
-                "unknown volume format (expected .nii, .nii.gz, .nrrd, .mha, .mhd, .tif/.tiff or a folder of slices)",
+                "unknown volume format (expected .nii, .nii.gz, .nrrd, .mha, .mhd, .tif/.tiff, a folder of slices or DICOM files)",
             ))
         }
     }
@@ -113,6 +124,7 @@ impl Format {
             Format::Mhd => "MetaImage (detached)",
             Format::Tiff => "TIFF stack",
             Format::SliceFolder => "slice folder",
+            Format::Dicom => "DICOM",
         }
     }
 }
@@ -201,7 +213,34 @@ fn load(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<Loaded, IoEr
         Format::Mha | Format::Mhd => meta::read(src, limits, want),
         Format::Tiff => tiff_stack::read(src, limits, want),
         Format::SliceFolder => folder::read(path, limits, want),
+        Format::Dicom => dicom_load(path, None, limits, want),
     }
+}
+
+/// A DICOM series through the limits. The DICOM reader bounds its own
+/// allocations from each file's header (rows, columns, frames, file count);
+/// the limits are checked on the geometry it assembles, and a header read
+/// assembles the volume (a series has no single header to stop after).
+fn dicom_load(
+    path: &Path,
+    series: Option<&str>,
+    limits: &ReadLimits,
+    want: Want,
+) -> Result<Loaded, IoError> {
+    let v = dicom::read(path, series)?;
+    let g = v.geometry().clone();
+    let stored_type = raw::RawType::of(&v);
+    let data_bytes = (g.len() as u64).saturating_mul(stored_type.size() as u64);
+    limits.check(path, g.dims, data_bytes)?;
+    Ok(match want {
+        Want::Volume => Loaded::Volume(v),
+        Want::Header => Loaded::Header(VolumeHeader {
+            format: Format::Dicom,
+            geometry: g,
+            stored_type,
+            data_bytes,
+        }),
+    })
 }
 
 fn volume(path: &Path, l: Loaded) -> Result<AnyVolume, IoError> {
@@ -215,6 +254,25 @@ fn header(path: &Path, l: Loaded) -> Result<VolumeHeader, IoError> {
     match l {
         Loaded::Header(h) => Ok(h),
         Loaded::Volume(_) => Err(IoError::invalid(path, "no header was read")),
+    }
+}
+
+/// Read a volume like [`read_volume`]; `series` (a SeriesInstanceUID)
+/// chooses the series of a DICOM folder that holds several, and is an error
+/// for any other format.
+pub fn read_volume_series(path: &Path, series: Option<&str>) -> Result<AnyVolume, IoError> {
+    let Some(uid) = series else {
+        return read_volume(path);
+    };
+    match Format::of_path(path)? {
+        Format::Dicom => volume(
+            path,
+            dicom_load(path, Some(uid), &ReadLimits::default(), Want::Volume)?,
+        ),
+        other => Err(IoError::unsupported(
+            path,
+            format!("a series UID chooses a DICOM series, but this is a {other}"),
+        )),
     }
 }
 
@@ -234,13 +292,22 @@ pub fn write_volume(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
         Format::Mhd => meta::write(path, v, false),
         Format::Tiff => tiff_stack::write(path, v),
         Format::SliceFolder => folder::write(path, v),
+        Format::Dicom => Err(IoError::unsupported(
+            path,
+            "writing DICOM is not supported (write .nii.gz, .nrrd, .mha or .tif)",
+        )),
     }
 }
 
 /// Read a label volume: [`read_volume`] then [`AnyVolume::to_labels`]
 /// (integer values 0..=65535; anything else is an error).
 pub fn read_labels(path: &Path) -> Result<LabelVolume, IoError> {
-    let v = read_volume(path)?;
+    read_labels_series(path, None)
+}
+
+/// Read a label volume, choosing a DICOM series as [`read_volume_series`] does.
+pub fn read_labels_series(path: &Path, series: Option<&str>) -> Result<LabelVolume, IoError> {
+    let v = read_volume_series(path, series)?;
     v.to_labels()
         .map_err(|e| IoError::invalid(path, format!("not a label volume: {e}")))
 }

@@ -10,12 +10,14 @@ use std::path::PathBuf;
 /// Arguments of `convert`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The volume file or slice folder to read.
+    /// The volume file, slice folder or DICOM folder to read.
     pub input: PathBuf,
     /// The file or folder to write; its extension picks the format (.nii,
     /// .nii.gz, .nrrd, .mha, .mhd, .tif; a folder, or a name without an
     /// extension, for PNG slices).
     pub output: PathBuf,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
     /// Store the volume as labels: integer values 0..=65535, written as u8
     /// when the largest is at most 255, else u16 (fails on other values).
     /// (Implied by a `.seg.nrrd` output, or an input that names its components.)
@@ -45,7 +47,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => segmentation::read_components(&args.input)?,
     };
     if args.labels || to_seg_nrrd || !components.is_empty() {
-        let v = interslice_io::read_labels(&args.input)?;
+        let v = args.series.read_labels(&args.input)?;
         if to_seg_nrrd || !components.is_empty() {
             for f in segmentation::write_segmentation(&args.output, &v, &components)?.iter().skip(1) {
                 println!("wrote {}", f.display());
@@ -62,7 +64,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         return Ok(());
     }
-    let v = interslice_io::read_volume(&args.input)?;
+    let v = args.series.read_volume(&args.input)?;
     interslice_io::write_volume(&args.output, &v).with_context(|| {
         format!(
             "cannot convert {} ({}) to {}",
@@ -102,6 +104,7 @@ mod tests {
             output: output.to_path_buf(),
             labels,
             components: None,
+            series: Default::default(),
         })
     }
 

@@ -6,6 +6,7 @@
 //! object. Without it, every non-zero label present in either volume is
 //! evaluated, plus `foreground` (the union of all labels), and `--json` prints
 //! `{"labels": {"1": {...}, ...}, "foreground": {...}}`.
+use crate::series::SeriesArg;
 use anyhow::{Context, Result, bail};
 use interslice_core::metrics::{
     DEFAULT_TOLERANCE, Metrics, evaluate_all, evaluate_foreground, evaluate_label,
@@ -37,6 +38,8 @@ pub struct Args {
     pub ground_truth: PathBuf,
     /// The label volume to measure, on the same grid.
     pub segmentation: PathBuf,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
     /// Evaluate only the voxels equal to N (for 0/1 masks, N = 1). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
@@ -56,8 +59,10 @@ pub struct Args {
     pub tolerance: f64,
 }
 
-fn read(path: &Path, what: &str) -> Result<LabelVolume> {
-    interslice_io::read_labels(path).with_context(|| format!("reading the {what}"))
+fn read(path: &Path, series: &SeriesArg, what: &str) -> Result<LabelVolume> {
+    series
+        .read_labels(path)
+        .with_context(|| format!("reading the {what}"))
 }
 
 /// Err when the two volumes are not on one grid or carry different units.
@@ -85,9 +90,12 @@ pub fn run(mut a: Args) -> Result<()> {
         );
     }
     let spin = crate::progress::spinner("measuring");
+    let series = a
+        .series
+        .for_inputs(&[a.ground_truth.as_path(), a.segmentation.as_path()])?;
     let (gt, seg) = rayon::join(
-        || read(&a.ground_truth, "ground truth"),
-        || read(&a.segmentation, "segmentation"),
+        || read(&a.ground_truth, &series[0], "ground truth"),
+        || read(&a.segmentation, &series[1], "segmentation"),
     );
     let (gt, seg) = (gt?, seg?);
     check_geometry(&gt, &seg)?;

@@ -1,4 +1,4 @@
-//! `interslice info FILE [--json]`: format, dims, spacing + unit, origin,
+//! `interslice info FILE [--json] [--series UID]`: format, dims, spacing + unit, origin,
 //! direction, voxel type, value range and, for label volumes, every label
 //! with its voxel count and physical volume.
 use anyhow::Context;
@@ -13,7 +13,7 @@ const MAX_AUTO_LABELS: usize = 64;
 /// Arguments of `info`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The volume file or slice folder.
+    /// The volume file, slice folder or DICOM folder.
     pub input: PathBuf,
     /// Print one JSON object.
     #[arg(long)]
@@ -21,6 +21,8 @@ pub struct Args {
     /// List every non-zero value as a label even when there are many.
     #[arg(long)]
     pub labels: bool,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
 }
 
 /// Voxel counts of every distinct integer value, or None for float volumes.
@@ -66,7 +68,13 @@ fn fmt_num(x: f64) -> String {
 /// Run `info`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let format = interslice_io::Format::of_path(&args.input)?;
-    let v = interslice_io::read_volume(&args.input)?;
+    if format == interslice_io::Format::Dicom && args.series.series.is_none() {
+        let series = interslice_io::dicom::list_series(&args.input)?;
+        if series.len() > 1 {
+            return print_series(&args, &series);
+        }
+    }
+    let v = args.series.read_volume(&args.input)?;
     let g = v.geometry().clone();
     let (min, max) = v.min_max();
     let unit = g.unit.symbol();
@@ -191,6 +199,42 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A DICOM folder with several series: list them and say how to choose one.
+fn print_series(args: &Args, series: &[interslice_io::dicom::SeriesInfo]) -> anyhow::Result<()> {
+    if args.json {
+        let list: Vec<Value> = series
+            .iter()
+            .map(|s| {
+                json!({"uid": s.uid, "description": s.description, "number": s.number,
+                       "modality": s.modality, "files": s.files, "dims": s.dims})
+            })
+            .collect();
+        let out =
+            json!({"path": args.input.display().to_string(), "format": "DICOM", "series": list});
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!("file:       {}", args.input.display());
+    println!("format:     DICOM, {} series", series.len());
+    println!(
+        "  {:<8} {:<16} {:<24} {:>6}  description",
+        "modality", "dims", "series UID", "files"
+    );
+    for s in series {
+        let [x, y, z] = s.dims;
+        println!(
+            "  {:<8} {:<16} {:<24} {:>6}  {}",
+            s.modality,
+            format!("{x} x {y} x {z}"),
+            s.uid,
+            s.files,
+            s.description
+        );
+    }
+    println!("choose one with --series UID");
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -226,6 +270,7 @@ mod tests {
                 input: p.clone(),
                 json,
                 labels: false,
+                series: Default::default(),
             })
             .unwrap();
         }
@@ -233,6 +278,7 @@ mod tests {
             input: dir.path().join("none.nrrd"),
             json: true,
             labels: false,
+            series: Default::default(),
         };
         let e = format!("{:#}", run(missing).unwrap_err());
         assert!(e.contains("none.nrrd") && !e.contains('\n'), "{e}");

@@ -19,6 +19,8 @@ pub struct Args {
     /// The sparse label volume (drawn slices carry the tracings).
     #[arg(required_unless_present = "list")]
     pub sparse: Option<PathBuf>,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
     /// Output label volume; the format follows the extension.
     #[arg(long, required_unless_present = "list")]
     pub out: Option<PathBuf>,
@@ -62,7 +64,9 @@ pub fn run(a: Args) -> Result<()> {
     let method = by_name(a.method.as_deref().unwrap_or(DEFAULT_METHOD))?;
     let started = std::time::Instant::now();
     let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
-    let input = interslice_io::read_volume(&sparse_path)
+    let input = a
+        .series
+        .read_volume(&sparse_path)
         .with_context(|| format!("reading {}", sparse_path.display()))?;
     let sparse = input
         .to_labels()

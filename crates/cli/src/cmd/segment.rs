@@ -18,6 +18,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// The intensity volume (8- or 16-bit; i16 and f32 are accepted too).
     pub input: PathBuf,
+    #[command(flatten)]
+    pub series: crate::series::SeriesArg,
     /// Thresholding method: otsu, rosin, kmeans or multi-otsu.
     #[arg(long, value_parser = parse_method)]
     pub method: SegmentMethod,
@@ -81,7 +83,9 @@ pub fn run(a: Args) -> Result<()> {
     if a.connectivity == Connectivity::Full && !a.largest_component {
         bail!("--connectivity only matters with --largest-component");
     }
-    let v = interslice_io::read_volume(&a.input)
+    let v = a
+        .series
+        .read_volume(&a.input)
         .with_context(|| format!("reading {}", a.input.display()))?;
     let seg = segment_detailed(&v, &p, &interslice_core::Cancel::new())
         .with_context(|| format!("segmenting {}", a.input.display()))?;
