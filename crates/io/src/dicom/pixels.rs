@@ -6,7 +6,7 @@
 use super::header::{FileHeader, PixelFormat};
 use super::series::{Arranged, Plane};
 use crate::IoError;
-use crate::raw::{self, RawType};
+use crate::raw::RawType;
 use dicom_dictionary_std::tags;
 use dicom_pixeldata::PixelDecoder;
 use dicom_transfer_syntax_registry::{TransferSyntaxIndex, TransferSyntaxRegistry};
@@ -81,7 +81,7 @@ fn check_file_size(h: &FileHeader, px: PixelFormat) -> Result<(), IoError> {
 pub(crate) fn read(dir: &Path, files: &[FileHeader], a: &Arranged) -> Result<AnyVolume, IoError> {
     let plane_len = a.geometry.dims[0] * a.geometry.dims[1];
     // Bounds the allocation below (dims come from headers).
-    raw::checked_bytes(dir, a.geometry.dims, RawType::I32)?;
+    crate::limits::ReadLimits::default().array_bytes(dir, a.geometry.dims, RawType::I32)?;
     let used: Vec<bool> = (0..files.len())
         .map(|i| a.planes.iter().any(|p| p.file == i))
         .collect();
