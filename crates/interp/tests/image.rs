@@ -203,11 +203,18 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
                 .skipped;
             let g = score(&guided, &mask, Axis::Z, k).unwrap().unwrap().skipped;
             println!("structure {i} k={k}: shape-auto {s:.4}, image-guided {g:.4}");
+            // Measured: cell 0.9902 / 0.9856 / 0.9820 both (leave-one-out
+            // keeps the shape: its error is already below the image's);
+            // nucleus 0.9784 both at k = 1, 0.9526 -> 0.9707 at k = 5,
+            // 0.9444 -> 0.9680 at k = 7.
             if k == 1 {
                 assert!(g >= s - 0.005, "structure {i} k={k}: {g} vs {s}");
+            } else if i == 1 {
+                assert!(g > s + 0.01, "nucleus k={k}: {g} vs {s}");
             } else {
-                assert!(g > s, "structure {i} k={k}: {g} vs {s}");
+                assert!(g >= s, "cell k={k}: {g} vs {s}");
             }
         }
     }
 }
+

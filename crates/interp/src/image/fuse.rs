@@ -4,10 +4,9 @@
 //!
 //! The logit of "inside" at pixel `x` is
 //! `z0(x) = −φ(x) / τ + w · L(I(x))`, where `φ` is the prior's signed distance
-//! (physical units, negative inside), `τ = p (1 + δ s / (2p))` grows with the
-//! distance `δ` (in slices, spacing `s`; `p` the in-plane pixel size) to the
-//! nearest drawn slice, because the shape is less sure in the middle of a
-//! wide gap, and `L` is the log-likelihood ratio of the intensity
+//! (physical units, negative inside), `τ` is the prior's uncertainty, which
+//! grows with the distance `δ` to the nearest drawn slice (fitted by
+//! leave-one-out, [`crate::image::Plan`]), and `L` is the log-likelihood ratio of the intensity
 //! ([`IntensityModel`]). With `λ > 0`, `z` then minimises
 //! `Σ (z − z0)² + λ Σ_{x~y} ω_xy (z_x − z_y)²` (Jacobi iterations), with
 //! `ω_xy = exp(−(I_x − I_y)² / 2σ²)`: the random walker's edge weights
@@ -43,22 +42,26 @@ pub fn band(plane: &Plane, delta: f64) -> f32 {
         .min(40.0 * p) as f32
 }
 
-/// The prior's scale `τ` at `delta` slices from the nearest drawn slice.
+/// The prior's default scale `τ` at `delta` slices from the nearest drawn
+/// slice (used for the shape methods' confidence; the image method fits its
+/// own, [`crate::image::Plan`]).
 pub fn tau(plane: &Plane, delta: f64) -> f32 {
     let p = plane.spacing[0].min(plane.spacing[1]);
     (p * (1.0 + 0.5 * delta * plane.slice_spacing / p)) as f32
 }
 
 /// The fused logit of "inside" of one slice (`> 0` inside) and the mask.
+///
+/// `t` is the prior's scale `τ` (physical units) and `delta` the distance to
+/// the nearest drawn slice, in slices (it sets the band).
 pub fn fuse(
     phi: &[f32],
     image: &[f32],
     model: &IntensityModel,
     plane: &Plane,
-    delta: f64,
+    (t, delta): (f32, f64),
     p: Params,
 ) -> (Vec<bool>, Vec<f32>) {
-    let t = tau(plane, delta);
     let b = band(plane, delta);
     let mut z: Vec<f32> = phi
         .iter()
