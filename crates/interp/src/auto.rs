@@ -18,7 +18,7 @@
 //! slices. `shape-aligned` keeps its caps *between* drawn slices (an object
 //! that ends inside a gap), where the tracing says the object stops.
 use crate::aligned::ShapeAligned;
-use crate::loo::{Compact, overlap, pooled_dice};
+use crate::loo::{Compact, HeldOut, overlap, pooled_dice};
 use crate::nearest::Nearest;
 use crate::shape_based::ShapeBased;
 use crate::{InterpError, Interpolator, SparseMask};
@@ -41,12 +41,15 @@ pub fn candidates() -> Vec<Box<dyn Interpolator>> {
 }
 
 /// The outcome of the leave-one-out choice.
-#[derive(Debug, Clone)]
 pub struct Choice {
     /// Index into [`candidates`].
     pub index: usize,
     /// Pooled held-out Dice of every candidate (empty without held-out slices).
     pub scores: Vec<f64>,
+    /// The chosen candidate's predictions of the held-out slices.
+    pub held: Vec<HeldOut>,
+    /// The compact stack they were predicted on.
+    pub compact: Compact,
 }
 
 impl ShapeAuto {
@@ -55,12 +58,15 @@ impl ShapeAuto {
         let compact = Compact::of(input)?;
         let cands = candidates();
         let mut scores = Vec::new();
+        let mut preds = Vec::new();
         for c in &cands {
             let held = compact.held_out(c.as_ref())?;
             if held.is_empty() {
                 return Ok(Choice {
                     index: 0,
                     scores: Vec::new(),
+                    held,
+                    compact,
                 });
             }
             let mut acc = (0u64, 0u64);
@@ -70,6 +76,7 @@ impl ShapeAuto {
                 acc.1 += b;
             }
             scores.push(pooled_dice(acc));
+            preds.push(held);
         }
         let mut index = 0;
         for (i, &s) in scores.iter().enumerate().skip(1) {
@@ -77,7 +84,13 @@ impl ShapeAuto {
                 index = i;
             }
         }
-        Ok(Choice { index, scores })
+        let held = preds.swap_remove(index);
+        Ok(Choice {
+            index,
+            scores,
+            held,
+            compact,
+        })
     }
 }
 

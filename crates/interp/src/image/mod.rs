@@ -33,7 +33,7 @@ pub mod model;
 
 use crate::auto::{ShapeAuto, candidates};
 use crate::confidence::{shape_confidence, sigmoid};
-use crate::loo::{Compact, overlap, pooled_dice};
+use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
 use crate::slices::{Plane, assemble, bracket};
 use crate::{InterpError, Interpolator, SparseMask};
@@ -131,7 +131,8 @@ impl ImageGuided {
         input.validate()?;
         self.check_grid(input)?;
         let plane = Plane::of(input);
-        let prior = ShapeAuto.choose(input)?.index;
+        let choice = ShapeAuto.choose(input)?;
+        let prior = choice.index;
         let shape_only = Params {
             w: 0.0,
             lambda: 0.0,
@@ -161,8 +162,7 @@ impl ImageGuided {
             prior_error: (plane.spacing[0].min(plane.spacing[1]) as f32, 1.0),
             model,
         };
-        let compact = Compact::of(input)?;
-        let held = compact.held_out(candidates()[prior].as_ref())?;
+        let (compact, held) = (&choice.compact, &choice.held);
         if held.is_empty() {
             return Ok(plan);
         }
@@ -207,7 +207,7 @@ impl ImageGuided {
         let base = {
             let acc = cases
                 .iter()
-                .zip(&held)
+                .zip(held)
                 .map(|((truth, ..), h)| overlap(&h.predicted, truth))
                 .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
             pooled_dice(acc)
