@@ -217,4 +217,3 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
         }
     }
 }
-

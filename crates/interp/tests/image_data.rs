@@ -27,11 +27,13 @@ fn on_stardist_nuclei_the_image_guided_method_never_loses_to_the_shape() {
     // the band fusion around it does not create them, so the image does not
     // beat the shape on the held-out slices. The floors keep both honest.
     for (k, floor) in [(1usize, 0.90), (3, 0.81), (5, 0.745)] {
-        let s = score(&ShapeAuto, &mask, Axis::Z, k).unwrap().unwrap().skipped;
+        let s = score(&ShapeAuto, &mask, Axis::Z, k)
+            .unwrap()
+            .unwrap()
+            .skipped;
         let g = score(&guided, &mask, Axis::Z, k).unwrap().unwrap().skipped;
         println!("stardist k={k}: shape-auto {s:.4}, image-guided {g:.4}");
         assert!(g >= s - 0.005, "k={k}: {g} vs {s}");
         assert!(s >= floor, "shape-auto k={k}: {s} < {floor}");
     }
 }
-

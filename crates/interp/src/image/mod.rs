@@ -187,7 +187,9 @@ impl ImageGuided {
                 phi.iter()
                     .zip(truth)
                     .filter(|(d, t)| (**d < 0.0) != **t)
-                    .fold((0.0f64, 0u64), |a, (d, _)| (a.0 + f64::from(d.abs()), a.1 + 1))
+                    .fold((0.0f64, 0u64), |a, (d, _)| {
+                        (a.0 + f64::from(d.abs()), a.1 + 1)
+                    })
             })
             .fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         let px = plane.spacing[0].min(plane.spacing[1]);
@@ -281,7 +283,14 @@ impl ImageGuided {
                 }
                 let phi = signed_distance(&p, &plane);
                 let img = self.image_slice(&self.image, input, s);
-                Some(fuse(&phi, &img, model, &plane, (plan.tau(delta), delta), plan.params))
+                Some(fuse(
+                    &phi,
+                    &img,
+                    model,
+                    &plane,
+                    (plan.tau(delta), delta),
+                    plan.params,
+                ))
             })
             .collect();
         let mask = assemble(input, |s| fused[s].as_ref().map(|f| f.0.clone()));
