@@ -4,6 +4,8 @@
 //! the tracing's grid or an image method without an image is a one-line error.
 use interslice_core::{AnyVolume, Axis, Geometry, LabelVolume, LengthUnit, Volume};
 
+// Shared helpers; this file uses the binary and the error check only.
+#[allow(dead_code)]
 mod common;
 use common::{assert_one_line_error, bin};
 

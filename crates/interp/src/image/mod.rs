@@ -69,6 +69,10 @@ pub const GRID: [(f32, f32); 8] = [
 /// Scales tried to calibrate the confidence (`σ(c · z)`).
 const SCALES: [f32; 6] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0];
 
+/// One held-out slice: its truth, the prior's signed distance, the image,
+/// and how far (slices) the prediction reached.
+type Case<'a> = (Vec<bool>, Vec<f32>, &'a [f32], f64);
+
 /// Image-guided interpolation on one intensity volume.
 #[derive(Debug, Clone)]
 pub struct ImageGuided {
@@ -168,7 +172,7 @@ impl ImageGuided {
         }
         // Per held-out slice: its truth, the prior's signed distance, the
         // image, and how far the prediction reached.
-        let cases: Vec<(Vec<bool>, Vec<f32>, &[f32], f64)> = held
+        let cases: Vec<Case<'_>> = held
             .par_iter()
             .map(|h| {
                 (
