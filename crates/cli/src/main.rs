@@ -27,6 +27,8 @@ enum Command {
     Interpolate(cmd::interpolate::Args),
     /// Drop slices of a ground truth, interpolate with every method, measure.
     Study(cmd::study::Args),
+    /// The interpolation benchmark on the development data (scripts/fetch-interp-data.sh).
+    Bench(cmd::bench::Args),
     /// Convert between contours files and label volumes.
     Contours(cmd::contours::Args),
     /// Measure a segmentation against a ground truth (overlap and surface metrics).
@@ -60,6 +62,7 @@ fn main() {
         Command::Convert(a) => cmd::convert::run(a),
         Command::Interpolate(a) => cmd::interpolate::run(a),
         Command::Study(a) => cmd::study::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
         Command::Contours(a) => cmd::contours::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
         Command::Phantom(a) => cmd::phantom::run(a),

@@ -23,6 +23,32 @@ pub fn interpolate_labels(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<LabelVolume, InterpError> {
+    Ok(run(method, sparse, axis, drawn, false)?.0)
+}
+
+/// [`interpolate_labels`] with the confidence per voxel: the least
+/// confidence of any label there (each label's from
+/// [`Interpolator::interpolate_with_confidence`]), 1 where no label is unsure.
+pub fn interpolate_labels_with_confidence(
+    method: &dyn Interpolator,
+    sparse: &LabelVolume,
+    axis: Axis,
+    drawn: &[usize],
+) -> Result<(LabelVolume, Volume<f32>), InterpError> {
+    let (labels, conf) = run(method, sparse, axis, drawn, true)?;
+    Ok((labels, conf.expect("confidence requested")))
+}
+
+/// A label's result and, when asked, its confidence.
+type LabelResult = Result<(Mask, Option<Volume<f32>>), InterpError>;
+
+fn run(
+    method: &dyn Interpolator,
+    sparse: &LabelVolume,
+    axis: Axis,
+    drawn: &[usize],
+    confidence: bool,
+) -> Result<(LabelVolume, Option<Volume<f32>>), InterpError> {
     let mut drawn = drawn.to_vec();
     drawn.sort_unstable();
     drawn.dedup();
@@ -39,20 +65,28 @@ pub fn interpolate_labels(
         )));
     }
     let labels: Vec<u16> = drawn_labels(sparse, axis, &drawn);
-    let masks: Vec<Result<Mask, InterpError>> = labels
+    let results: Vec<LabelResult> = labels
         .par_iter()
         .map(|&l| {
             let m = traced_mask(sparse, axis, &drawn, l);
-            method.interpolate(SparseMask {
+            let input = SparseMask {
                 mask: &m,
                 axis,
                 drawn: &drawn,
-            })
+            };
+            if confidence {
+                let (mask, c) = method.interpolate_with_confidence(input)?;
+                Ok((mask, Some(c)))
+            } else {
+                Ok((method.interpolate(input)?, None))
+            }
         })
         .collect();
     let mut out: LabelVolume = Volume::zeros(sparse.geometry().clone());
-    for (l, m) in labels.iter().zip(masks) {
-        let m = m?;
+    let mut conf: Option<Volume<f32>> =
+        confidence.then(|| Volume::filled(sparse.geometry().clone(), 1.0f32));
+    for (l, r) in labels.iter().zip(results) {
+        let (m, c) = r?;
         out.data_mut()
             .par_iter_mut()
             .zip(m.data().par_iter())
@@ -61,8 +95,14 @@ pub fn interpolate_labels(
                     *o = *l;
                 }
             });
+        if let (Some(all), Some(c)) = (conf.as_mut(), c) {
+            all.data_mut()
+                .par_iter_mut()
+                .zip(c.data().par_iter())
+                .for_each(|(a, &x)| *a = a.min(x));
+        }
     }
-    Ok(out)
+    Ok((out, conf))
 }
 
 /// Labels present on the drawn slices, ascending (each is interpolated on

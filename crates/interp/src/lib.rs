@@ -6,17 +6,23 @@
 #![deny(missing_docs)]
 
 pub mod aligned;
+pub mod auto;
+pub mod confidence;
 pub mod drawn;
+pub mod image;
 pub mod labels;
 pub mod linear;
+pub mod loo;
 pub mod mesh;
 pub mod method;
+pub mod nearest;
+pub mod protocol;
 pub mod registry;
 pub mod sdf;
 pub mod shape_based;
 pub mod shape_cubic;
 pub mod slices;
 
-pub use labels::interpolate_labels;
+pub use labels::{interpolate_labels, interpolate_labels_with_confidence};
 pub use method::{InterpError, Interpolator, SparseMask};
-pub use registry::{DEFAULT_METHOD, by_name, methods};
+pub use registry::{DEFAULT_METHOD, IMAGE_METHOD, by_name, by_name_with_image, methods};

@@ -1,5 +1,5 @@
 //! The interpolator trait shared by every method.
-use interslice_core::{Axis, Mask};
+use interslice_core::{Axis, Mask, Volume};
 use thiserror::Error;
 
 /// Errors of interpolation; messages are one line for the user.
@@ -37,6 +37,17 @@ pub trait Interpolator: Send + Sync {
     fn description(&self) -> &'static str;
     /// Interpolate one label's mask.
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError>;
+    /// Interpolate and say how sure the result is per voxel, in `[0.5, 1]`
+    /// (see [`crate::confidence`]). By default, from the distance to the
+    /// result's boundary and to the nearest drawn slice.
+    fn interpolate_with_confidence(
+        &self,
+        input: SparseMask<'_>,
+    ) -> Result<(Mask, Volume<f32>), InterpError> {
+        let m = self.interpolate(input)?;
+        let c = crate::confidence::shape_confidence(&m, &input, 1.0);
+        Ok((m, c))
+    }
 }
 
 impl SparseMask<'_> {

@@ -1,9 +1,15 @@
 //! The list of interpolators, by `--method` name. The default comes first.
+use crate::image::ImageGuided;
 use crate::{InterpError, Interpolator};
+use interslice_core::Volume;
+use std::sync::Arc;
 
-/// The method used when none is named; chosen by the study on the phantom
-/// (see `docs/interpolation.md`).
-pub const DEFAULT_METHOD: &str = "shape-aligned";
+/// The method used when none is named (and no image is given): the
+/// leave-one-out choice among the shape methods (see `docs/interpolation.md`).
+pub const DEFAULT_METHOD: &str = "shape-auto";
+
+/// The method used when an intensity image is given and no method is named.
+pub const IMAGE_METHOD: &str = "image-guided";
 
 /// Every interpolator, the default first.
 pub fn methods() -> Vec<Box<dyn Interpolator>> {
@@ -12,6 +18,8 @@ pub fn methods() -> Vec<Box<dyn Interpolator>> {
         Box::new(crate::shape_cubic::ShapeCubic),
         Box::new(crate::linear::Linear),
         Box::new(crate::aligned::ShapeAligned::default()),
+        Box::new(crate::nearest::Nearest),
+        Box::new(crate::auto::ShapeAuto),
     ];
     // The four mesh-based methods of the original system.
     all.extend(crate::mesh::mesh_methods());
@@ -33,6 +41,27 @@ pub fn by_name(name: &str) -> Result<Box<dyn Interpolator>, InterpError> {
             names.join(", ")
         ))
     })
+}
+
+/// The interpolator named `name` (or the image method, or the default, when
+/// `None`), given the intensity volume of the cell when there is one. The
+/// image methods need `image`; an unknown name lists the valid ones.
+pub fn by_name_with_image(
+    name: Option<&str>,
+    image: Option<Arc<Volume<f32>>>,
+) -> Result<Box<dyn Interpolator>, InterpError> {
+    match (name, image) {
+        (None | Some(IMAGE_METHOD), Some(img)) => Ok(Box::new(ImageGuided::new(img))),
+        (Some(IMAGE_METHOD), None) => Err(InterpError::Input(format!(
+            "method {IMAGE_METHOD} needs the intensity volume (--image)"
+        ))),
+        (name, _) => by_name(name.unwrap_or(DEFAULT_METHOD)).map_err(|e| match e {
+            InterpError::Input(m) => {
+                InterpError::Input(format!("{m}, {IMAGE_METHOD} (with an image)"))
+            }
+            other => other,
+        }),
+    }
 }
 
 #[cfg(test)]

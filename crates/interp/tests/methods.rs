@@ -81,6 +81,8 @@ fn run(
 /// - gaussian-splat     0.7443 / 0.6924 / 0.7189 / 0.6332 (inflates by at least half the gap)
 /// - delaunay           0.9026 / 0.9395 / 0.6097 / 0.8863 (alpha filter leaves holes)
 /// - unorganized-points 0.9245 / 0.8742 / 0.8112 / 0.8377
+/// - nearest            0.9466 / 0.9170 / 0.8752 / 0.9468
+/// - shape-auto         0.9763 / 0.9528 / 0.9612 / 0.9278 (leave-one-out picks shape-aligned)
 ///
 /// `linear` drops the object on the skipped slices between its last drawn
 /// slice and a drawn-empty one, as the original did, hence its lower axis floor.
@@ -93,6 +95,8 @@ const FLOORS: &[(&str, [f64; 4])] = &[
     ("gaussian-splat", [0.74, 0.685, 0.71, 0.625]),
     ("delaunay", [0.90, 0.935, 0.60, 0.88]),
     ("unorganized-points", [0.92, 0.87, 0.80, 0.83]),
+    ("nearest", [0.945, 0.915, 0.87, 0.945]),
+    ("shape-auto", [0.97, 0.95, 0.955, 0.92]),
 ];
 
 /// Methods that, by their documented limits, merge objects closer than

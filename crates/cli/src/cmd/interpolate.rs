@@ -1,17 +1,24 @@
-//! `interslice interpolate SPARSE --out OUT [--method M] [--axis z|y|x] [--drawn FILE]`
-//! and `interslice interpolate --list`.
+//! `interslice interpolate SPARSE --out OUT [--image IMAGE] [--confidence OUT2]
+//! [--method M] [--axis z|y|x] [--drawn FILE]` and `interslice interpolate --list`.
 //!
 //! SPARSE is a label volume whose drawn slices carry the tracings. Drawn
 //! slices are the slices with any non-zero voxel along `--axis`, or exactly
 //! the indices listed in `--drawn FILE` (one integer a line; a listed slice
 //! without voxels is a known-empty slice). Every label is interpolated on its
 //! own; OUT has the geometry and voxel type of SPARSE, in the format its
-//! extension names.
+//! extension names. With `--image` (an intensity volume on SPARSE's grid) and
+//! no `--method`, the image-guided method is used; `--confidence OUT2` writes
+//! the confidence per voxel (f32 in `[0.5, 1]`).
 use anyhow::{Context, Result, bail};
 use interslice_core::{AnyVolume, Axis, LabelVolume, Volume};
 use interslice_interp::drawn::{nonempty_slices, parse_drawn};
-use interslice_interp::{DEFAULT_METHOD, by_name, interpolate_labels, methods};
+use interslice_interp::image::intensity_f32;
+use interslice_interp::{
+    DEFAULT_METHOD, IMAGE_METHOD, by_name_with_image, interpolate_labels,
+    interpolate_labels_with_confidence, methods,
+};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Arguments of `interpolate`.
 #[derive(clap::Args)]
@@ -24,9 +31,16 @@ pub struct Args {
     /// Output label volume; the format follows the extension.
     #[arg(long, required_unless_present = "list")]
     pub out: Option<PathBuf>,
-    /// Interpolation method (see `--list`); the default is the best measured one.
+    /// Interpolation method (see `--list`); the default is the best measured
+    /// one (`image-guided` when `--image` is given).
     #[arg(long)]
     pub method: Option<String>,
+    /// The intensity volume of the cell, on SPARSE's grid, for the image methods.
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// Also write the confidence per voxel (f32, 0.5 = a coin toss, 1 = sure) here.
+    #[arg(long)]
+    pub confidence: Option<PathBuf>,
     /// Axis the slices were drawn along.
     #[arg(long, default_value = "z")]
     pub axis: Axis,
@@ -56,14 +70,16 @@ pub fn run(a: Args) -> Result<()> {
             };
             println!("{:<20} {}{tag}", m.name(), m.description());
         }
+        println!(
+            "{IMAGE_METHOD:<20} shape prior fused with the intensity likelihood of the drawn slices, \
+             weight chosen by leave-one-out (needs --image; the default with it)"
+        );
         return Ok(());
     }
     let (Some(sparse_path), Some(out)) = (a.sparse, a.out) else {
         bail!("interpolate needs SPARSE and --out (or --list)");
     };
-    let method = by_name(a.method.as_deref().unwrap_or(DEFAULT_METHOD))?;
     let started = std::time::Instant::now();
-    let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
     let input = a
         .series
         .read_volume(&sparse_path)
@@ -71,6 +87,12 @@ pub fn run(a: Args) -> Result<()> {
     let sparse = input
         .to_labels()
         .with_context(|| format!("{} is not a label volume", sparse_path.display()))?;
+    let image = match &a.image {
+        Some(p) => Some(Arc::new(read_image(p, &sparse)?)),
+        None => None,
+    };
+    let method = by_name_with_image(a.method.as_deref(), image)?;
+    let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
     let drawn = drawn_slices(&sparse, a.axis, a.drawn.as_deref())?;
     let labels = interslice_interp::labels::drawn_labels(&sparse, a.axis, &drawn).len();
     if labels > a.max_labels {
@@ -81,11 +103,22 @@ pub fn run(a: Args) -> Result<()> {
             a.max_labels
         );
     }
-    let result = interpolate_labels(method.as_ref(), &sparse, a.axis, &drawn)
-        .with_context(|| format!("method {}", method.name()))?;
+    let (result, confidence) = if a.confidence.is_some() {
+        let (l, c) = interpolate_labels_with_confidence(method.as_ref(), &sparse, a.axis, &drawn)
+            .with_context(|| format!("method {}", method.name()))?;
+        (l, Some(c))
+    } else {
+        let l = interpolate_labels(method.as_ref(), &sparse, a.axis, &drawn)
+            .with_context(|| format!("method {}", method.name()))?;
+        (l, None)
+    };
     let written = same_type(&input, result)?;
     interslice_io::write_volume(&out, &written)
         .with_context(|| format!("writing {}", out.display()))?;
+    if let (Some(p), Some(c)) = (&a.confidence, confidence) {
+        interslice_io::write_volume(p, &AnyVolume::F32(c))
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
     spin.finish_and_clear();
     println!(
         "{}: {} drawn slices along {}, {:.2} s -> {}",
@@ -96,6 +129,17 @@ pub fn run(a: Args) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// The intensity volume at `path` as f32; an error unless it lies on the
+/// grid of `sparse`.
+pub fn read_image(path: &Path, sparse: &LabelVolume) -> Result<Volume<f32>> {
+    let img = interslice_io::read_volume(path)
+        .with_context(|| format!("reading image {}", path.display()))?;
+    img.geometry()
+        .ensure_same_grid(sparse.geometry())
+        .with_context(|| format!("image {} is not on the tracing's grid", path.display()))?;
+    Ok(intensity_f32(&img))
 }
 
 /// The drawn slices: the `--drawn` file's indices, or the non-empty slices.

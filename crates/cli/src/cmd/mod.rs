@@ -1,4 +1,5 @@
 //! One module per subcommand.
+pub mod bench;
 pub mod campaign;
 pub mod contours;
 pub mod convert;

@@ -1,6 +1,8 @@
-//! `interslice study GROUND_TRUTH --out DIR [--axis z] [--skips 0..9] [--methods a,b,...]
-//! [--label N]`: the interpolation study of the 2014 paper, on any fully traced
-//! label volume.
+//! `interslice study GROUND_TRUTH --out DIR [--image IMAGE] [--axis z] [--skips 0..9]
+//! [--methods a,b,...] [--label N]`: the interpolation study of the 2014 paper, on
+//! any fully traced label volume. With `--image` (the intensity volume on the
+//! ground truth's grid) the image-guided method is studied too, next to the
+//! shape-only ones.
 //!
 //! For every number of skipped slices `k`, the drawn slices are the first and
 //! last non-empty slices along the axis and every `(k + 1)`-th slice from the
@@ -17,9 +19,12 @@
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use interslice_core::metrics::{Metrics, evaluate_label};
-use interslice_core::{Axis, LabelVolume, Volume};
+use interslice_core::{Axis, LabelVolume};
 use interslice_interp::drawn::nonempty_slices;
-use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name, interpolate_labels, methods};
+use interslice_interp::protocol::{drawn_for, sparse_of};
+use interslice_interp::{
+    DEFAULT_METHOD, IMAGE_METHOD, Interpolator, by_name_with_image, interpolate_labels, methods,
+};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -43,6 +48,9 @@ pub struct Args {
     /// Comma-separated methods (default: every registered method).
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
+    /// The intensity volume on the ground truth's grid: adds the image-guided method.
+    #[arg(long)]
+    pub image: Option<PathBuf>,
     /// Study only this label (default: every label of the ground truth). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
@@ -88,18 +96,28 @@ const PLOTTED: &[(&str, &str, bool)] = &[
 pub fn run(mut a: Args) -> Result<()> {
     a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.ground_truth])).transpose()?;
     let skips = parse_skips(&a.skips)?;
+    let gt = interslice_io::read_labels(&a.ground_truth)
+        .with_context(|| format!("reading {}", a.ground_truth.display()))?;
+    let image = match &a.image {
+        Some(p) => Some(std::sync::Arc::new(super::interpolate::read_image(p, &gt)?)),
+        None => None,
+    };
     let chosen: Vec<Box<dyn Interpolator>> = match &a.methods {
         Some(names) => names
             .iter()
-            .map(|n| by_name(n.trim()).map_err(anyhow::Error::from))
+            .map(|n| by_name_with_image(Some(n.trim()), image.clone()).map_err(anyhow::Error::from))
             .collect::<Result<_>>()?,
-        None => methods(),
+        None => {
+            let mut all = methods();
+            if image.is_some() {
+                all.insert(0, by_name_with_image(Some(IMAGE_METHOD), image.clone())?);
+            }
+            all
+        }
     };
     if chosen.is_empty() {
         bail!("no methods to study");
     }
-    let gt = interslice_io::read_labels(&a.ground_truth)
-        .with_context(|| format!("reading {}", a.ground_truth.display()))?;
     let present: Vec<u16> = gt
         .label_counts()
         .iter()
@@ -216,25 +234,6 @@ pub fn parse_skips(s: &str) -> Result<Vec<usize>> {
         return Err(bad());
     }
     Ok(out)
-}
-
-/// The drawn slices of a run: `first`, every `(k + 1)`-th after it, and `last`.
-pub fn drawn_for(first: usize, last: usize, k: usize) -> Vec<usize> {
-    let mut d: Vec<usize> = (first..=last).step_by(k + 1).collect();
-    if d.last() != Some(&last) {
-        d.push(last);
-    }
-    d
-}
-
-/// The ground truth with every slice but `drawn` erased.
-pub fn sparse_of(gt: &LabelVolume, axis: Axis, drawn: &[usize]) -> LabelVolume {
-    let mut s: LabelVolume = Volume::zeros(gt.geometry().clone());
-    for &d in drawn {
-        let buf = gt.slice(axis, d).expect("drawn slice in range");
-        s.set_slice(axis, d, &buf).expect("same geometry");
-    }
-    s
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -539,6 +538,9 @@ fn provenance(a: &Args) -> Provenance {
     }
     if let Some(m) = &a.methods {
         let _ = write!(study, " --methods {}", m.join(","));
+    }
+    if let Some(p) = &a.image {
+        let _ = write!(study, " --image {}", p.display());
     }
     if let Some(l) = a.label {
         let _ = write!(study, " --label {l}");

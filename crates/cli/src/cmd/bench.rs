@@ -1,0 +1,348 @@
+//! `interslice bench [--data DIR] [--skips 1,3,5,9] [--methods a,b] [--per-mask]
+//! [--json FILE] [--speed]`: the interpolation benchmark on the development data.
+//!
+//! Every mask is run through the protocol of [`interslice_interp::protocol`]
+//! (first and last non-empty slice and every `(k + 1)`-th slice drawn along
+//! z, Dice on the skipped slices) with each method, the image-guided one on
+//! the mask's own intensity volume. Masks are cropped to their box grown by a
+//! margin (the interpolation of one mask does not see beyond it). The data
+//! (`scripts/fetch-interp-data.sh` prints DIR): the noisy phantom (generated),
+//! stardist's synthetic 3D nuclei, pyradiomics' CT and MR cases and ITK's T1
+//! with its k-means classes; a family whose files are missing is skipped with
+//! a note. `--speed` times the methods on phantom cells of 256×256×60 and
+//! 197×233×189 voxels instead.
+use anyhow::{Context, Result, bail};
+use interslice_core::phantom::{PhantomParams, generate};
+use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_interp::image::{ImageGuided, intensity_f32};
+use interslice_interp::protocol::{bounding_box, crop, score};
+use interslice_interp::{Interpolator, by_name};
+use serde::Serialize;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Arguments of `bench`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder of the development data (printed by scripts/fetch-interp-data.sh).
+    #[arg(long, default_value = "target/interp-data")]
+    pub data: PathBuf,
+    /// Numbers of skipped slices, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,3,5,9")]
+    pub skips: Vec<usize>,
+    /// Methods, comma-separated (`image-guided` runs where the mask has an image).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "nearest,shape-based,shape-aligned,shape-auto,image-guided"
+    )]
+    pub methods: Vec<String>,
+    /// Also print one line per mask.
+    #[arg(long)]
+    pub per_mask: bool,
+    /// Write every row as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Time the methods on large phantom volumes instead.
+    #[arg(long)]
+    pub speed: bool,
+}
+
+/// One mask of the benchmark.
+struct Case {
+    family: &'static str,
+    name: String,
+    mask: Mask,
+    image: Option<Arc<Volume<f32>>>,
+}
+
+/// One measured (mask, method, k).
+#[derive(Serialize)]
+struct Row {
+    family: &'static str,
+    mask: String,
+    method: String,
+    skip: usize,
+    dice_skipped: f64,
+    dice_whole: f64,
+    seconds: f64,
+}
+
+/// Largest number of skipped slices accepted.
+const MAX_SKIP: usize = 50;
+/// Margin of the crop around a mask, in voxels.
+const MARGIN: usize = 8;
+
+/// Run `bench`.
+pub fn run(a: Args) -> Result<()> {
+    if a.skips.is_empty() || a.skips.iter().any(|&k| k == 0 || k > MAX_SKIP) {
+        bail!("--skips: give numbers of skipped slices in 1..={MAX_SKIP}");
+    }
+    if a.speed {
+        return speed(&a.methods);
+    }
+    let cases = load_cases(&a.data)?;
+    let mut rows = Vec::new();
+    for c in &cases {
+        for name in &a.methods {
+            let method: Box<dyn Interpolator> = match (name.as_str(), &c.image) {
+                ("image-guided", Some(img)) => Box::new(ImageGuided::new(img.clone())),
+                ("image-guided", None) => continue,
+                (n, _) => by_name(n)?,
+            };
+            for &k in &a.skips {
+                let Some(s) = score(method.as_ref(), &c.mask, Axis::Z, k)
+                    .with_context(|| format!("{} on {}", name, c.name))?
+                else {
+                    continue;
+                };
+                rows.push(Row {
+                    family: c.family,
+                    mask: c.name.clone(),
+                    method: name.clone(),
+                    skip: k,
+                    dice_skipped: s.skipped,
+                    dice_whole: s.whole,
+                    seconds: s.seconds,
+                });
+            }
+        }
+        eprintln!("bench: {} done", c.name);
+    }
+    print_table(&rows, &a);
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&rows)?;
+        interslice_io::raw::write_atomic(p, |w| w.write_all(text.as_bytes()))
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
+/// The masks of every family whose data is there.
+fn load_cases(dir: &Path) -> Result<Vec<Case>> {
+    let mut cases = Vec::new();
+    for seed in [1u64, 2] {
+        let p = generate(&PhantomParams {
+            size: 96,
+            seed,
+            bits: 8,
+            noise: 0.10,
+        })?;
+        let image = Arc::new(intensity_f32(&p.intensity));
+        for (name, min) in [("cell", 1u16), ("nucleus", 2)] {
+            let mask = p.labels.map(|l| l >= min);
+            cases.push(cropped(
+                "noisy phantom",
+                format!("phantom{seed}-{name}"),
+                &mask,
+                Some(&image),
+            )?);
+        }
+    }
+    let sd = dir.join("stardist");
+    if sd.join("mask3d.tif").is_file() {
+        let labels = interslice_io::read_labels(&sd.join("mask3d.tif"))?;
+        let img = intensity_f32(&interslice_io::read_volume(&sd.join("img3d.tif"))?);
+        let image = Arc::new(img);
+        cases.push(cropped(
+            "stardist nuclei",
+            "stardist-all".into(),
+            &labels.map(|l| l > 0),
+            Some(&image),
+        )?);
+    } else {
+        eprintln!(
+            "bench: no {} (run scripts/fetch-interp-data.sh)",
+            sd.display()
+        );
+    }
+    let pr = dir.join("pyradiomics");
+    for (family, name) in [
+        ("CT lung lesions", "lung1"),
+        ("CT lung lesions", "lung2"),
+        ("MR brain / breast", "brain1"),
+        ("MR brain / breast", "brain2"),
+        ("MR brain / breast", "breast1"),
+    ] {
+        let lp = pr.join(format!("{name}_label.nrrd"));
+        if !lp.is_file() {
+            eprintln!(
+                "bench: no {} (run scripts/fetch-interp-data.sh)",
+                lp.display()
+            );
+            continue;
+        }
+        let labels = interslice_io::read_labels(&lp)?;
+        let img = read_on_grid(&pr.join(format!("{name}_image.nrrd")), &labels)?;
+        cases.push(cropped(
+            family,
+            name.into(),
+            &labels.map(|l| l > 0),
+            Some(&Arc::new(img)),
+        )?);
+    }
+    let itk = dir.join("itk");
+    if itk.join("T1_kmeans.nii.gz").is_file() {
+        let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz"))?;
+        let img = Arc::new(read_on_grid(&itk.join("T1.nii.gz"), &labels)?);
+        for (l, _) in labels.label_counts().into_iter().filter(|&(l, _)| l > 0) {
+            cases.push(cropped(
+                "T1 k-means classes",
+                format!("T1-class{l}"),
+                &labels.mask_of(l),
+                Some(&img),
+            )?);
+        }
+    } else {
+        eprintln!(
+            "bench: no {} (run scripts/fetch-interp-data.sh)",
+            itk.display()
+        );
+    }
+    Ok(cases)
+}
+
+/// The intensity volume at `path`, which must share the labels' dims.
+fn read_on_grid(path: &Path, labels: &LabelVolume) -> Result<Volume<f32>> {
+    let img = intensity_f32(&interslice_io::read_volume(path)?);
+    if img.dims() != labels.dims() {
+        bail!(
+            "{}: dims {:?} differ from its labels' {:?}",
+            path.display(),
+            img.dims(),
+            labels.dims()
+        );
+    }
+    Ok(img)
+}
+
+/// A case cropped to its mask's box grown by [`MARGIN`].
+fn cropped(
+    family: &'static str,
+    name: String,
+    mask: &Mask,
+    image: Option<&Arc<Volume<f32>>>,
+) -> Result<Case> {
+    let bbox = bounding_box(mask, MARGIN).with_context(|| format!("{name}: empty mask"))?;
+    Ok(Case {
+        family,
+        name,
+        mask: crop(mask, bbox)?,
+        image: match image {
+            Some(i) => Some(Arc::new(crop(i, bbox)?)),
+            None => None,
+        },
+    })
+}
+
+/// Mean of the rows matching `f`.
+fn mean(rows: &[Row], f: impl Fn(&Row) -> bool, v: impl Fn(&Row) -> f64) -> Option<f64> {
+    let xs: Vec<f64> = rows.iter().filter(|r| f(r)).map(v).collect();
+    (!xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64)
+}
+
+fn print_table(rows: &[Row], a: &Args) {
+    let cell = |x: Option<f64>| x.map_or("   -  ".to_string(), |v| format!("{v:.4}"));
+    let ks: Vec<String> = a.skips.iter().map(|k| format!("k={k:<4}")).collect();
+    println!(
+        "| family (masks) | method | {} | whole k={} | s/run |",
+        ks.join(" | "),
+        a.skips[a.skips.len() / 2]
+    );
+    println!("|---|---|{}---|---|", "---|".repeat(a.skips.len()));
+    let mut families: Vec<&str> = rows.iter().map(|r| r.family).collect();
+    families.dedup();
+    let whole_k = a.skips[a.skips.len() / 2];
+    for fam in families {
+        let mut masks: Vec<&str> = rows
+            .iter()
+            .filter(|r| r.family == fam)
+            .map(|r| r.mask.as_str())
+            .collect();
+        masks.dedup();
+        for m in &a.methods {
+            let sel = |r: &Row| r.family == fam && &r.method == m;
+            if !rows.iter().any(sel) {
+                continue;
+            }
+            let per_k: Vec<String> = a
+                .skips
+                .iter()
+                .map(|&k| cell(mean(rows, |r| sel(r) && r.skip == k, |r| r.dice_skipped)))
+                .collect();
+            println!(
+                "| {fam} ({}) | {m} | {} | {} | {:.3} |",
+                masks.len(),
+                per_k.join(" | "),
+                cell(mean(
+                    rows,
+                    |r| sel(r) && r.skip == whole_k,
+                    |r| r.dice_whole
+                )),
+                mean(rows, sel, |r| r.seconds).unwrap_or(0.0)
+            );
+        }
+        if a.per_mask {
+            for mask in &masks {
+                for m in &a.methods {
+                    let sel = |r: &Row| r.mask == *mask && &r.method == m;
+                    if !rows.iter().any(sel) {
+                        continue;
+                    }
+                    let per_k: Vec<String> = a
+                        .skips
+                        .iter()
+                        .map(|&k| cell(mean(rows, |r| sel(r) && r.skip == k, |r| r.dice_skipped)))
+                        .collect();
+                    println!(
+                        "|   {mask} | {m} | {} | {} | |",
+                        per_k.join(" | "),
+                        cell(mean(
+                            rows,
+                            |r| sel(r) && r.skip == whole_k,
+                            |r| r.dice_whole
+                        ))
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Time the methods (k = 5) on phantom cells of the two sizes of the speed targets.
+fn speed(methods: &[String]) -> Result<()> {
+    let p = generate(&PhantomParams {
+        size: 256,
+        seed: 3,
+        bits: 8,
+        noise: 0.05,
+    })?;
+    let image = intensity_f32(&p.intensity);
+    let mask = p.labels.map(|l| l >= 1);
+    println!("| volume | method | seconds (k=5) | Dice skipped |");
+    println!("|---|---|---|---|");
+    for dims in [[256usize, 256, 60], [197, 233, 189]] {
+        // A box of `dims` centred on the cell.
+        let bbox: [[usize; 2]; 3] = std::array::from_fn(|a| {
+            let lo = (256 - dims[a]) / 2;
+            [lo, lo + dims[a]]
+        });
+        let m = crop(&mask, bbox)?;
+        let img = Arc::new(crop(&image, bbox)?);
+        for name in methods {
+            let method: Box<dyn Interpolator> = if name == "image-guided" {
+                Box::new(ImageGuided::new(img.clone()))
+            } else {
+                by_name(name)?
+            };
+            let s =
+                score(method.as_ref(), &m, Axis::Z, 5)?.context("the cell shows on the crop")?;
+            println!(
+                "| {}×{}×{} | {name} | {:.3} | {:.4} |",
+                dims[0], dims[1], dims[2], s.seconds, s.skipped
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,111 @@
+//! `shape-auto`: the shape-only default. Per label, the shape method that best
+//! predicts the tracer's own drawn slices from their neighbours (leave-one-out,
+//! [`crate::loo`]) interpolates the volume.
+//!
+//! The candidates answer different kinds of tracing: `shape-aligned` (matched,
+//! aligned objects with caps: single or few objects that drift or tilt),
+//! `shape-based` (plain signed-distance blending: ribbons and porous shapes
+//! whose pieces do not correspond one to one) and `nearest` (copies: fields of
+//! many small objects that appear and vanish between drawn slices). The
+//! choice is the highest pooled Dice over the held-out slices; a candidate
+//! must beat the one listed before it by more than [`MARGIN`] to be chosen,
+//! so that noise in a few held-out slices does not move off `shape-aligned`.
+//!
+//! **End rule.** No candidate reaches past the first or last drawn slice: the
+//! outermost drawn slices are taken as where the tracer saw the object begin
+//! and end (the protocol of the benchmark, and what a tracer is asked to do).
+//! A structure cut by the tracer's range is continued only by drawing further
+//! slices. `shape-aligned` keeps its caps *between* drawn slices (an object
+//! that ends inside a gap), where the tracing says the object stops.
+use crate::aligned::ShapeAligned;
+use crate::loo::{Compact, HeldOut, overlap, pooled_dice};
+use crate::nearest::Nearest;
+use crate::shape_based::ShapeBased;
+use crate::{InterpError, Interpolator, SparseMask};
+use interslice_core::Mask;
+
+/// Pooled Dice a later candidate must gain over an earlier one to be chosen.
+pub const MARGIN: f64 = 0.002;
+
+/// Leave-one-out choice among the shape methods.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ShapeAuto;
+
+/// The candidates, in order of preference.
+pub fn candidates() -> Vec<Box<dyn Interpolator>> {
+    vec![
+        Box::new(ShapeAligned { end_caps: false }),
+        Box::new(ShapeBased),
+        Box::new(Nearest),
+    ]
+}
+
+/// The outcome of the leave-one-out choice.
+pub struct Choice {
+    /// Index into [`candidates`].
+    pub index: usize,
+    /// Pooled held-out Dice of every candidate (empty without held-out slices).
+    pub scores: Vec<f64>,
+    /// The chosen candidate's predictions of the held-out slices.
+    pub held: Vec<HeldOut>,
+    /// The compact stack they were predicted on.
+    pub compact: Compact,
+}
+
+impl ShapeAuto {
+    /// Choose the candidate for `input` on its drawn slices.
+    pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
+        let compact = Compact::of(input)?;
+        let cands = candidates();
+        let mut scores = Vec::new();
+        let mut preds = Vec::new();
+        for c in &cands {
+            let held = compact.held_out(c.as_ref())?;
+            if held.is_empty() {
+                return Ok(Choice {
+                    index: 0,
+                    scores: Vec::new(),
+                    held,
+                    compact,
+                });
+            }
+            let mut acc = (0u64, 0u64);
+            for h in &held {
+                let (a, b) = overlap(&h.predicted, &compact.truth(h.pos));
+                acc.0 += a;
+                acc.1 += b;
+            }
+            scores.push(pooled_dice(acc));
+            preds.push(held);
+        }
+        let mut index = 0;
+        for (i, &s) in scores.iter().enumerate().skip(1) {
+            if s > scores[index] + MARGIN {
+                index = i;
+            }
+        }
+        let held = preds.swap_remove(index);
+        Ok(Choice {
+            index,
+            scores,
+            held,
+            compact,
+        })
+    }
+}
+
+impl Interpolator for ShapeAuto {
+    fn name(&self) -> &'static str {
+        "shape-auto"
+    }
+
+    fn description(&self) -> &'static str {
+        "per label, the shape method (aligned, signed-distance blend, nearest copy) that best predicts the drawn slices left out one at a time; no caps past the outermost drawn slices"
+    }
+
+    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        input.validate()?;
+        let choice = self.choose(&input)?;
+        candidates()[choice.index].interpolate(input)
+    }
+}

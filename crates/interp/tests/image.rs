@@ -1,0 +1,219 @@
+//! The image-guided method and the leave-one-out shape default: the trait's
+//! invariants with an image that pulls the boundary, separation of objects
+//! the image would bridge, gains on the noisy phantom, and the fallback to the
+//! shape where the image is noise.
+use interslice_core::phantom::{PhantomParams, generate};
+use interslice_core::{Axis, Mask, Volume};
+use interslice_interp::auto::ShapeAuto;
+use interslice_interp::image::{ImageGuided, intensity_f32};
+use interslice_interp::protocol::{bounding_box, crop, drawn_for_skip, score, sparse_of};
+use interslice_interp::{Interpolator, SparseMask};
+use proptest::prelude::*;
+use std::sync::Arc;
+
+mod common;
+use common::{in_ellipsoid, shape};
+
+/// Deterministic noise in [-1, 1] (SplitMix64 of the index).
+fn noise(i: u64) -> f32 {
+    let mut z = i.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+}
+
+/// An image that shows `truth` (bright inside) with noise of amplitude `amp`.
+fn image_of(truth: &Mask, amp: f32) -> Arc<Volume<f32>> {
+    let data = truth
+        .data()
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| if x { 100.0 } else { 20.0 } + amp * noise(i as u64))
+        .collect();
+    Arc::new(Volume::from_vec(truth.geometry().clone(), data).unwrap())
+}
+
+fn interpolate(m: &dyn Interpolator, sparse: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
+    m.interpolate(SparseMask {
+        mask: sparse,
+        axis,
+        drawn,
+    })
+    .unwrap()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    /// Drawn slices exact, drawn-empty slices empty, nothing past the
+    /// outermost drawn slices; any axis, anisotropic spacing; with an image
+    /// that shows the truth (so the fusion is used) or is noise.
+    #[test]
+    fn image_guided_keeps_the_invariants(
+        c in (8.0f64..12.0, 7.0f64..10.0, 9.0f64..13.0),
+        r in (3.0f64..6.0, 3.0f64..5.0, 4.0f64..8.0),
+        sz in 0.6f64..1.6,
+        axis in prop::sample::select(Axis::ALL.to_vec()),
+        step in 2usize..5,
+        amp in prop::sample::select(vec![5.0f32, 200.0]),
+    ) {
+        let truth = shape([20, 18, 22], [1.0, 0.8, sz], |p| {
+            in_ellipsoid(p, [c.0, c.1 * 0.8, c.2 * sz], [r.0, r.1 * 0.8, r.2 * sz])
+        });
+        let n = truth.slice_count(axis);
+        // Drawn: an empty slice at 0, then every `step`-th slice.
+        let drawn: Vec<usize> = (0..n).step_by(step).collect();
+        prop_assume!(drawn.len() >= 3);
+        let sparse = sparse_of(&truth, axis, &drawn);
+        let m = ImageGuided::new(image_of(&truth, amp));
+        let (out, conf) = m
+            .interpolate_with_confidence(SparseMask { mask: &sparse, axis, drawn: &drawn })
+            .unwrap();
+        prop_assert_eq!(out.geometry(), truth.geometry());
+        for &d in &drawn {
+            prop_assert_eq!(out.slice(axis, d).unwrap(), sparse.slice(axis, d).unwrap());
+            prop_assert!(conf.slice(axis, d).unwrap().iter().all(|&x| x == 1.0));
+        }
+        let last = *drawn.last().unwrap();
+        for s in last + 1..n {
+            prop_assert!(!out.slice(axis, s).unwrap().iter().any(|&x| x), "past the last drawn slice");
+        }
+        prop_assert!(conf.data().iter().all(|&x| (0.5..=1.0).contains(&x)));
+    }
+}
+
+#[test]
+fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
+    // Two balls 3 voxels apart; the image is bright in both and in the gap.
+    let a = |p: [f64; 3]| in_ellipsoid(p, [10.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
+    let b = |p: [f64; 3]| in_ellipsoid(p, [25.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
+    let truth = shape([36, 32, 32], [1.0; 3], |p| a(p) || b(p));
+    let bridge = shape([36, 32, 32], [1.0; 3], |p| {
+        a(p) || b(p)
+            || (p[0] > 10.0
+                && p[0] < 25.0
+                && (p[1] - 16.0).abs() < 5.0
+                && (p[2] - 16.0).abs() < 11.0)
+    });
+    let drawn = drawn_for_skip(&truth, Axis::Z, 5).unwrap();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let out = interpolate(
+        &ImageGuided::new(image_of(&bridge, 2.0)),
+        &sparse,
+        Axis::Z,
+        &drawn,
+    );
+    for k in 0..32 {
+        let s = out.slice(Axis::Z, k).unwrap();
+        // No 8-connected path from the left ball's half to the right one's.
+        let comps = components8(&s, 36, 32);
+        for comp in comps {
+            let left = comp.iter().any(|&p| p % 36 < 17);
+            let right = comp.iter().any(|&p| p % 36 > 18);
+            assert!(!(left && right), "balls joined on z={k}");
+        }
+    }
+}
+
+fn components8(s: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {
+    let mut seen = vec![false; s.len()];
+    let mut out = Vec::new();
+    for start in 0..s.len() {
+        if !s[start] || seen[start] {
+            continue;
+        }
+        let mut comp = Vec::new();
+        let mut stack = vec![start];
+        seen[start] = true;
+        while let Some(p) = stack.pop() {
+            comp.push(p);
+            let (u, v) = ((p % w) as i64, (p / w) as i64);
+            for dv in -1..=1 {
+                for du in -1..=1 {
+                    let (x, y) = (u + du, v + dv);
+                    if x >= 0 && y >= 0 && x < w as i64 && y < h as i64 {
+                        let q = x as usize + w * y as usize;
+                        if s[q] && !seen[q] {
+                            seen[q] = true;
+                            stack.push(q);
+                        }
+                    }
+                }
+            }
+        }
+        out.push(comp);
+    }
+    out
+}
+
+#[test]
+fn leave_one_out_keeps_the_shape_where_the_image_is_noise() {
+    let truth = shape([32, 32, 40], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 15.0, 20.0], [11.0, 9.0, 16.0])
+    });
+    let data = (0..truth.data().len())
+        .map(|i| 50.0 + 30.0 * noise(i as u64))
+        .collect();
+    let img = Arc::new(Volume::from_vec(truth.geometry().clone(), data).unwrap());
+    let drawn = drawn_for_skip(&truth, Axis::Z, 3).unwrap();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask {
+        mask: &sparse,
+        axis: Axis::Z,
+        drawn: &drawn,
+    };
+    let m = ImageGuided::new(img);
+    let plan = m.plan(&input).unwrap();
+    assert_eq!(plan.params.w, 0.0, "{plan:?}");
+    assert_eq!(
+        m.interpolate(input).unwrap(),
+        ShapeAuto.interpolate(input).unwrap()
+    );
+}
+
+/// The noisy phantom's cell and nucleus, cropped: (mask, image).
+fn noisy_phantom() -> Vec<(Mask, Arc<Volume<f32>>)> {
+    let p = generate(&PhantomParams {
+        size: 64,
+        seed: 2,
+        bits: 8,
+        noise: 0.10,
+    })
+    .unwrap();
+    let img = intensity_f32(&p.intensity);
+    [1u16, 2]
+        .iter()
+        .map(|&min| {
+            let m = p.labels.map(|l| l >= min);
+            let bb = bounding_box(&m, 4).unwrap();
+            (crop(&m, bb).unwrap(), Arc::new(crop(&img, bb).unwrap()))
+        })
+        .collect()
+}
+
+#[test]
+fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow_ones() {
+    for (i, (mask, img)) in noisy_phantom().into_iter().enumerate() {
+        let guided = ImageGuided::new(img);
+        for k in [1usize, 5, 7] {
+            let s = score(&ShapeAuto, &mask, Axis::Z, k)
+                .unwrap()
+                .unwrap()
+                .skipped;
+            let g = score(&guided, &mask, Axis::Z, k).unwrap().unwrap().skipped;
+            println!("structure {i} k={k}: shape-auto {s:.4}, image-guided {g:.4}");
+            // Measured: cell 0.9902 / 0.9856 / 0.9820 both (leave-one-out
+            // keeps the shape: its error is already below the image's);
+            // nucleus 0.9784 both at k = 1, 0.9526 -> 0.9707 at k = 5,
+            // 0.9444 -> 0.9680 at k = 7.
+            if k == 1 {
+                assert!(g >= s - 0.005, "structure {i} k={k}: {g} vs {s}");
+            } else if i == 1 {
+                assert!(g > s + 0.01, "nucleus k={k}: {g} vs {s}");
+            } else {
+                assert!(g >= s, "cell k={k}: {g} vs {s}");
+            }
+        }
+    }
+}

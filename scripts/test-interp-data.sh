@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# The image-guided interpolation on real data: fetches stardist's synthetic 3D
+# nuclei (a PyPI wheel of about 3 MB, checksummed, cached under the target
+# dir) and runs crates/interp/tests/image_data.rs on them.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+data="$(scripts/fetch-interp-data.sh --only stardist)"
+INTERSLICE_INTERP_DATA="$data" cargo test -q -p interslice-interp --test image_data
