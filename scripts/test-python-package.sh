@@ -27,21 +27,23 @@ if ! "$py" -c "import napari, PyQt5, pytest, pytestqt, yaml, maturin" 2>/dev/nul
   fi
 fi
 
-# Qt's offscreen platform still loads libGL, EGL, fontconfig, xkbcommon and dbus.
+# Qt's offscreen platform still loads libGL, EGL, fontconfig, xkbcommon and
+# dbus, and napari's canvas needs an OpenGL context, which the offscreen
+# platform takes from an X display: the tests run under Xvfb (Mesa renders).
+libs="xvfb xauth libgl1 libgl1-mesa-dri libegl1 libglib2.0-0 libfontconfig1 libxkbcommon0 libdbus-1-3"
 qt_ok() {
-  QT_QPA_PLATFORM=offscreen "$py" -c \
-    "from qtpy.QtWidgets import QApplication; QApplication([])" >/dev/null 2>&1
+  command -v xvfb-run >/dev/null &&
+    QT_QPA_PLATFORM=offscreen xvfb-run -a "$py" -c \
+      "from qtpy.QtWidgets import QApplication; QApplication([])" >/dev/null 2>&1
 }
 if ! qt_ok; then
-  libs="libgl1 libegl1 libglib2.0-0 libfontconfig1 libxkbcommon0 libdbus-1-3"
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    echo "installing the libraries Qt offscreen needs: $libs"
+    echo "installing what Qt offscreen and napari's canvas need: $libs"
     apt-get update -qq
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $libs >/dev/null
   fi
   if ! qt_ok; then
-    echo "error: Qt cannot start offscreen; install $libs" >&2
-    QT_QPA_PLATFORM=offscreen "$py" -c "from qtpy.QtWidgets import QApplication; QApplication([])" || true
+    echo "error: Qt cannot start offscreen under Xvfb; install $libs" >&2
     exit 1
   fi
 fi
@@ -55,11 +57,11 @@ echo "== python/: wheel"
 # The dev profile (optimised dependencies, as in the workspace) reuses what
 # `cargo build` compiled; `pip install ./python` builds the release wheel.
 rm -rf "$target/wheels-python"
-"$venv/bin/maturin" build -q --profile dev -m python/Cargo.toml -i "$py" -o "$target/wheels-python"
+"$venv/bin/maturin" build -q --strip --profile dev -m python/Cargo.toml -i "$py" -o "$target/wheels-python"
 "$py" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels-python/interslice-*.whl
 
 cargo build -q -p interslice-cli
 export INTERSLICE_BIN="$target/debug/interslice"
 
 echo "== python/: pytest"
-QT_QPA_PLATFORM=offscreen "$py" -m pytest -q -p no:cacheprovider python/tests
+QT_QPA_PLATFORM=offscreen xvfb-run -a "$py" -m pytest -q -p no:cacheprovider python/tests

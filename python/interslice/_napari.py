@@ -87,36 +87,36 @@ class InterpolateWidget(Container):
         method_choices = [(f"default ({interslice.DEFAULT_METHOD})", None)] + [
             (m["name"], m["name"]) for m in interslice.methods()
         ]
-        self._labels = ComboBox(label="labels", choices=self._labels_layers)
-        self._image = ComboBox(label="image", choices=self._image_layers, nullable=True, value=None)
-        self._method = ComboBox(label="method", choices=method_choices, value=None)
-        self._run = PushButton(text="Interpolate painted slices")
-        self._status = Label(value="")
-        self._suggestion = Label(value="")
-        self._goto = PushButton(text="Go to suggested slice", visible=False)
-        self._gt = ComboBox(label="ground truth", choices=self._labels_layers)
-        self._seg = ComboBox(label="segmentation", choices=self._labels_layers)
-        self._evaluate = PushButton(text="Evaluate")
-        self._table = Table(value={"data": [], "index": [], "columns": []})
+        self.labels_combo = ComboBox(label="labels", choices=self._labels_layers)
+        self.image_combo = ComboBox(label="image", choices=self._image_layers, nullable=True, value=None)
+        self.method_combo = ComboBox(label="method", choices=method_choices, value=None)
+        self.run_button = PushButton(text="Interpolate painted slices")
+        self.status_label = Label(value="")
+        self.suggestion_label = Label(value="")
+        self.goto_button = PushButton(text="Go to suggested slice", visible=False)
+        self.gt_combo = ComboBox(label="ground truth", choices=self._labels_layers)
+        self.seg_combo = ComboBox(label="segmentation", choices=self._labels_layers)
+        self.evaluate_button = PushButton(text="Evaluate")
+        self.metrics_table = Table(value={"data": [], "index": [], "columns": []})
         self._suggested: tuple[int, int] | None = None
         super().__init__(
             widgets=[
-                self._labels,
-                self._image,
-                self._method,
-                self._run,
-                self._status,
-                self._suggestion,
-                self._goto,
-                self._gt,
-                self._seg,
-                self._evaluate,
-                self._table,
+                self.labels_combo,
+                self.image_combo,
+                self.method_combo,
+                self.run_button,
+                self.status_label,
+                self.suggestion_label,
+                self.goto_button,
+                self.gt_combo,
+                self.seg_combo,
+                self.evaluate_button,
+                self.metrics_table,
             ]
         )
-        self._run.changed.connect(self.interpolate)
-        self._evaluate.changed.connect(self.evaluate)
-        self._goto.changed.connect(self._go_to_suggestion)
+        self.run_button.changed.connect(self.interpolate)
+        self.evaluate_button.changed.connect(self.evaluate)
+        self.goto_button.changed.connect(self._go_to_suggestion)
         events = napari_viewer.layers.events
         for ev in (events.inserted, events.removed, events.reordered):
             ev.connect(self.reset_choices)
@@ -132,7 +132,7 @@ class InterpolateWidget(Container):
         return self._layers("image")
 
     def _say(self, text: str) -> None:
-        self._status.value = text
+        self.status_label.value = text
 
     # -- interpolation -------------------------------------------------------
     def viewed_axis(self, layer) -> int:
@@ -146,7 +146,7 @@ class InterpolateWidget(Container):
 
     def interpolate(self) -> None:
         """Interpolate the chosen Labels layer along the viewed axis."""
-        layer = self._labels.value
+        layer = self.labels_combo.value
         if layer is None:
             self._say("choose a Labels layer")
             return
@@ -173,7 +173,7 @@ class InterpolateWidget(Container):
             raise interslice.Error(f"paint at least two slices along axis {axis} (found {len(drawn_list)})")
         sparse = np.zeros_like(data)
         sparse[_slices_along(axis, drawn_list)] = data[_slices_along(axis, drawn_list)]
-        image = self._image.value
+        image = self.image_combo.value
         img = None
         if image is not None:
             img = np.asarray(image.data)
@@ -187,7 +187,7 @@ class InterpolateWidget(Container):
             axis=2 - axis,
             spacing=spacing,
             image=img,
-            method=self._method.value,
+            method=self.method_combo.value,
         ).T
         undrawn = [i for i in range(n) if i not in drawn]
         if undrawn:
@@ -206,13 +206,13 @@ class InterpolateWidget(Container):
             return
         best = advise(sparse.T, drawn=drawn, axis=2 - axis, spacing=spacing, image=img, count=1)
         if not best:
-            self._suggestion.value = ""
-            self._goto.visible = False
+            self.suggestion_label.value = ""
+            self.goto_button.visible = False
             return
         index = int(best[0]["index"])
         self._suggested = (axis + self._viewer.dims.ndim - layer.ndim, index)
-        self._suggestion.value = f"next slice to paint: {index}"
-        self._goto.visible = True
+        self.suggestion_label.value = f"next slice to paint: {index}"
+        self.goto_button.visible = True
 
     def _go_to_suggestion(self) -> None:
         if self._suggested is not None:
@@ -221,7 +221,7 @@ class InterpolateWidget(Container):
     # -- evaluation ----------------------------------------------------------
     def evaluate(self) -> None:
         """Measure the segmentation layer against the ground-truth layer."""
-        gt, seg = self._gt.value, self._seg.value
+        gt, seg = self.gt_combo.value, self.seg_combo.value
         if gt is None or seg is None:
             self._say("choose a ground truth and a segmentation Labels layer")
             return
@@ -240,7 +240,7 @@ class InterpolateWidget(Container):
         cols = [(f"label {k}", m) for k, m in r["labels"].items()]
         if len(cols) != 1:
             cols.append(("all labels", r["foreground"]))
-        self._table.value = {
+        self.metrics_table.value = {
             "data": [[_fmt(m[key]) for _, m in cols] for _, key in METRIC_ROWS],
             "index": [name for name, _ in METRIC_ROWS],
             "columns": [name for name, _ in cols],

@@ -34,9 +34,9 @@ def test_widget_interpolates_painted_slices(make_napari_viewer):
 
     widget = InterpolateWidget(viewer)
     viewer.window.add_dock_widget(widget)
-    widget._labels.value = painted
+    widget.labels_combo.value = painted
     widget.interpolate()
-    assert "interpolated" in widget._status.value, widget._status.value
+    assert "interpolated" in widget.status_label.value, widget.status_label.value
 
     got = np.asarray(painted.data)
     assert dice(got, truth) > 0.95, dice(got, truth)
@@ -50,13 +50,13 @@ def test_widget_interpolates_painted_slices(make_napari_viewer):
     np.testing.assert_array_equal(np.asarray(painted.data)[z], truth[z])
     np.testing.assert_array_equal(np.asarray(painted.data)[zs], before[zs])
 
-    widget._gt.value = viewer.layers["nucleus truth"]
-    widget._seg.value = painted
+    widget.gt_combo.value = viewer.layers["nucleus truth"]
+    widget.seg_combo.value = painted
     widget.evaluate()
     m = widget.last_metrics["labels"]["1"]
     assert m["dice"] > 0.95
-    table = widget._table.value
-    assert table["columns"] == ["label 1"]
+    table = widget.metrics_table.value
+    assert list(table["columns"]) == ["label 1"]
     assert float(table["data"][table["index"].index("Dice")][0]) > 0.95
 
 
