@@ -122,14 +122,18 @@ class InterpolateWidget(Container):
             ev.connect(self.reset_choices)
 
     # -- layer choices -------------------------------------------------------
-    def _layers(self, kind: str):
-        return [(layer.name, layer) for layer in self._viewer.layers if layer._type_string == kind]
+    def _layers(self, kind):
+        return [(layer.name, layer) for layer in self._viewer.layers if isinstance(layer, kind)]
 
     def _labels_layers(self, _widget=None):
-        return self._layers("labels")
+        from napari.layers import Labels
+
+        return self._layers(Labels)
 
     def _image_layers(self, _widget=None):
-        return self._layers("image")
+        from napari.layers import Image
+
+        return self._layers(Image)
 
     def _say(self, text: str) -> None:
         self.status_label.value = text
