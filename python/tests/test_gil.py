@@ -41,21 +41,19 @@ def ticks_inside(call):
 
 
 def test_other_threads_run_during_evaluate_and_interpolate():
-    image, labels, meta = interslice.phantom(size=96, seed=2)
+    image, labels, meta = interslice.phantom(size=128, seed=2)
     seg = np.roll(labels, 2, axis=0)
     sp = meta["spacing"]
-
-    def evaluate():
-        for _ in range(4):
-            interslice.evaluate(labels, seg, sp)
-
     sparse = np.zeros_like(labels)
     sparse[:, :, ::4] = labels[:, :, ::4]
+
+    # One call each: between two calls the interpreter may switch threads.
+    def evaluate():
+        interslice.evaluate(labels, seg, sp)
 
     def interpolate():
         interslice.interpolate(sparse, spacing=sp, method="shape-based")
 
     for call in (evaluate, interpolate):
         inside, took = ticks_inside(call)
-        assert took > 0.02, f"{call.__name__} took only {took:.3f} s: too short to tell"
         assert inside > 0, f"no Python ran during {call.__name__} ({took:.3f} s)"
