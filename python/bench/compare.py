@@ -20,7 +20,7 @@ surface-distance run on one. Libraries that are not installed are skipped.
 Install the comparison libraries with
 ``pip install SimpleITK itk-morphologicalcontourinterpolation medpy monai surface-distance scipy``.
 
-    python python/bench/compare.py [--sizes 256,512] [--reps 3] [--threads 2] [--slow]
+    python python/bench/compare.py [--sizes 256,512] [--reps 3] [--threads 2] [--slow] [--cache DIR]
 """
 
 import argparse
@@ -43,6 +43,7 @@ def parse():
     ap.add_argument("--slow", action="store_true", help="also run medpy and surface-distance at 512³ (minutes each)")
     ap.add_argument("--phantom", type=int, default=256, help="phantom size for the interpolation rows")
     ap.add_argument("--only", default="", help="comma-separated sections: distance,overlap,interpolation")
+    ap.add_argument("--cache", default="", help="folder to keep the generated blob pairs in (.npy), to skip generating them again")
     return ap.parse_args()
 
 
@@ -169,10 +170,23 @@ def interslice_overlap(g, p):
     return {"dice": m["dice"], "jaccard": m["jaccard"], "sens": m["sensitivity"], "spec": m["specificity"]}
 
 
+def cached_pair(n):
+    if not args.cache:
+        return checked_pair(n)
+    os.makedirs(args.cache, exist_ok=True)
+    paths = [os.path.join(args.cache, f"blob{n}_{r}.npy") for r in ("gt", "pred")]
+    if all(os.path.exists(q) for q in paths):
+        return tuple(np.load(q) for q in paths)
+    pair = checked_pair(n)
+    for q, a in zip(paths, pair):
+        np.save(q, a)
+    return pair
+
+
 def metrics_section(n, want):
     print(f"\n== blob pair {n}³ (spacing {SPACING_XYZ} µm, {args.threads} threads)", flush=True)
     t0 = time.perf_counter()
-    g, p = checked_pair(n)
+    g, p = cached_pair(n)
     print(f"  (generated in {time.perf_counter() - t0:.1f} s; I/O and conversions outside the timings)")
     gb, pb = g.astype(bool), p.astype(bool)
     G = P = yg = yp = None
