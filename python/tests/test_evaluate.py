@@ -1,4 +1,5 @@
-"""`evaluate` gives the command line's JSON (same keys, same values) on
+"""`evaluate` gives the command line's JSON (same keys, same values to
+1e-12 relative) on
 every reference case, with or without a label, whatever the array layout
 and dtype; `overlap`, `staple` and `threshold` agree with the command line."""
 
@@ -25,10 +26,12 @@ def test_evaluate_equals_the_cli_json(name, gt, pred, cli_json):
     want = cli_json("evaluate", gt, pred, "--label", 1, "--json")
     with pytest.warns(UserWarning) if want["tp"] + want["fp"] + want["fn"] == 0 else _nothing():
         got = interslice.evaluate(g, p, meta["spacing"], label=1, unit=meta["unit"])
-    assert got == want
+    # Equal up to the last bits of sums that rayon may group differently
+    # from one run to the next (the command line differs from itself there).
+    close(got, want)
     assert list(got) == list(want), "keys in the command line's order"
     want_all = cli_json("evaluate", gt, pred, "--json")
-    assert interslice.evaluate(g, p, meta["spacing"], unit=meta["unit"]) == want_all
+    close(interslice.evaluate(g, p, meta["spacing"], unit=meta["unit"]), want_all)
 
 
 class _nothing:
