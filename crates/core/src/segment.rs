@@ -167,6 +167,76 @@ impl Segmentation {
         let vv = self.labels.geometry().voxel_volume();
         self.voxels.iter().map(|&n| n as f64 * vv).collect()
     }
+
+    /// What was done and found, as `interslice segment --json` (and the
+    /// Python `threshold`) report it; `p` are the parameters it was made with.
+    pub fn summary(&self, p: &SegmentParams) -> SegmentSummary {
+        let unit = self.labels.geometry().unit.ascii();
+        SegmentSummary {
+            method: p.method.name(),
+            classes: p.classes,
+            thresholds: self.thresholds.clone(),
+            foreground: "v > threshold",
+            binning: match self.binning {
+                Binning::Native => "native".to_string(),
+                Binning::Uniform(n) => format!("uniform{n}"),
+            },
+            smooth: p.smooth_sigma,
+            largest_component: p.largest_component,
+            connectivity: p.connectivity.neighbours(),
+            fill_holes: p.fill_holes,
+            unit: format!("{unit}^3"),
+            labels: self
+                .voxels
+                .iter()
+                .zip(self.volumes())
+                .enumerate()
+                .map(|(i, (&voxels, volume))| ClassSummary {
+                    label: i + 1,
+                    voxels,
+                    volume,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The report of a [`Segmentation`] (see [`Segmentation::summary`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SegmentSummary {
+    /// The method's name.
+    pub method: &'static str,
+    /// Classes including background.
+    pub classes: usize,
+    /// The thresholds, ascending.
+    pub thresholds: Vec<f64>,
+    /// How a threshold splits: always `v > threshold`.
+    pub foreground: &'static str,
+    /// The histogram binning: `native` or `uniformN`.
+    pub binning: String,
+    /// Gaussian σ applied first (physical units), 0 for none.
+    pub smooth: f64,
+    /// Whether only the largest connected component was kept.
+    pub largest_component: bool,
+    /// Neighbours of a voxel for that component: 6 or 26.
+    pub connectivity: u8,
+    /// Whether holes were filled.
+    pub fill_holes: bool,
+    /// The unit of the volumes, e.g. `um^3`.
+    pub unit: String,
+    /// Each label's voxels and physical volume.
+    pub labels: Vec<ClassSummary>,
+}
+
+/// One label of a [`SegmentSummary`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClassSummary {
+    /// The label, 1..K-1.
+    pub label: usize,
+    /// Its voxels.
+    pub voxels: u64,
+    /// Its physical volume (voxels × sx·sy·sz).
+    pub volume: f64,
 }
 
 fn err(e: ThresholdError) -> CoreError {

@@ -9,27 +9,11 @@
 use crate::series::SeriesArg;
 use anyhow::{Context, Result, bail};
 use interslice_core::metrics::{
-    DEFAULT_TOLERANCE, Metrics, evaluate_all, evaluate_foreground, evaluate_label,
+    AllReport, DEFAULT_TOLERANCE, LabelReport, Metrics, evaluate_all, evaluate_foreground,
+    evaluate_label,
 };
 use interslice_core::{LabelVolume, LengthUnit};
-use serde::Serialize;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-/// `--label N --json`: the metrics with the label first (keys in a fixed order).
-#[derive(Serialize)]
-struct Labelled<'a> {
-    label: u16,
-    #[serde(flatten)]
-    metrics: &'a Metrics,
-}
-
-/// `--json` without `--label`: labels in ascending order, then their union.
-#[derive(Serialize)]
-struct AllLabels<'a> {
-    labels: BTreeMap<u16, &'a Metrics>,
-    foreground: &'a Metrics,
-}
 
 /// Arguments of `evaluate`.
 #[derive(clap::Args)]
@@ -111,7 +95,7 @@ pub fn run(mut a: Args) -> Result<()> {
             );
         }
         if a.json {
-            let out = Labelled { label, metrics: &m };
+            let out = LabelReport { label, metrics: &m };
             println!("{}", serde_json::to_string_pretty(&out)?);
         } else {
             print!("{}", table(&[(format!("label {label}"), &m)]));
@@ -126,7 +110,7 @@ pub fn run(mut a: Args) -> Result<()> {
     let (all, fg) = (all?, fg?);
     spin.finish_and_clear();
     if a.json {
-        let out = AllLabels {
+        let out = AllReport {
             labels: all.iter().map(|(l, m)| (*l, m)).collect(),
             foreground: &fg,
         };

@@ -91,34 +91,17 @@ pub fn run(a: Args) -> Result<()> {
         .with_context(|| format!("segmenting {}", a.input.display()))?;
     interslice_io::write_labels(&a.out, &seg.labels)
         .with_context(|| format!("writing {}", a.out.display()))?;
-    let g = seg.labels.geometry();
-    let unit = g.unit.ascii();
-    let volumes = seg.volumes();
     if a.json {
-        let classes: Vec<serde_json::Value> = seg
-            .voxels
-            .iter()
-            .zip(&volumes)
-            .enumerate()
-            .map(|(i, (n, vol))| serde_json::json!({"label": i + 1, "voxels": n, "volume": vol}))
-            .collect();
-        let out = serde_json::json!({
-            "method": p.method.name(),
-            "classes": p.classes,
-            "thresholds": seg.thresholds,
-            "foreground": "v > threshold",
-            "binning": match seg.binning {
-                interslice_core::threshold::Binning::Native => "native".to_string(),
-                interslice_core::threshold::Binning::Uniform(n) => format!("uniform{n}"),
-            },
-            "smooth": p.smooth_sigma,
-            "largest_component": p.largest_component,
-            "connectivity": p.connectivity.neighbours(),
-            "fill_holes": p.fill_holes,
-            "unit": format!("{unit}^3"),
-            "labels": classes,
-            "out": a.out.display().to_string(),
-        });
+        #[derive(serde::Serialize)]
+        struct Out<'a> {
+            #[serde(flatten)]
+            summary: interslice_core::segment::SegmentSummary,
+            out: &'a str,
+        }
+        let out = Out {
+            summary: seg.summary(&p),
+            out: &a.out.display().to_string(),
+        };
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         let ts: Vec<String> = seg.thresholds.iter().map(|t| format!("{t}")).collect();
@@ -128,7 +111,8 @@ pub fn run(a: Args) -> Result<()> {
             if ts.len() > 1 { "s" } else { "" },
             ts.join(", ")
         );
-        for (i, (n, vol)) in seg.voxels.iter().zip(&volumes).enumerate() {
+        let unit = seg.labels.geometry().unit.ascii();
+        for (i, (n, vol)) in seg.voxels.iter().zip(seg.volumes()).enumerate() {
             println!("  label {}: {n} voxels, {vol:.3} {unit}^3", i + 1);
         }
         println!("wrote {}", a.out.display());

@@ -151,6 +151,42 @@ fn check_tolerance(tolerance: f64) -> Result<(), CoreError> {
     }
 }
 
+/// The metrics of one label as `evaluate --label N --json` prints them: the
+/// label first, then every metric (keys in a fixed order).
+#[derive(Debug, Clone, Serialize)]
+pub struct LabelReport<'a> {
+    /// The evaluated label.
+    pub label: u16,
+    /// Its metrics.
+    #[serde(flatten)]
+    pub metrics: &'a Metrics,
+}
+
+/// Every label as `evaluate --json` prints them without `--label`: labels in
+/// ascending order, then their union.
+#[derive(Debug, Clone, Serialize)]
+pub struct AllReport<'a> {
+    /// Metrics of each label present in either volume.
+    pub labels: BTreeMap<u16, &'a Metrics>,
+    /// Metrics of the union of all labels.
+    pub foreground: &'a Metrics,
+}
+
+/// Err unless both arrays hold exactly the voxels of `geometry`.
+fn check_data(geometry: &Geometry, gt: usize, seg: usize) -> Result<(), CoreError> {
+    geometry.validate()?;
+    for got in [gt, seg] {
+        if got != geometry.len() {
+            return Err(CoreError::DataLength {
+                dims: geometry.dims,
+                expected: geometry.len(),
+                got,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Metrics of the voxels of `seg` equal to `label` against those of `gt`.
 /// Errs when the two volumes are not on the same grid or `tolerance` (the NSD
 /// tolerance, physical units) is negative or not finite.
@@ -161,31 +197,29 @@ pub fn evaluate_label(
     tolerance: f64,
 ) -> Result<Metrics, CoreError> {
     gt.geometry().ensure_same_grid(seg.geometry())?;
+    evaluate_label_data(gt.geometry(), gt.data(), seg.data(), label, tolerance)
+}
+
+/// [`evaluate_label`] on borrowed arrays of any voxel type (x-fastest, both
+/// on `geometry`): the in-memory entry point for callers that hold their
+/// arrays elsewhere (the Python bindings evaluate numpy arrays in place).
+pub fn evaluate_label_data<T: Copy + PartialEq + Sync>(
+    geometry: &Geometry,
+    gt: &[T],
+    seg: &[T],
+    label: T,
+    tolerance: f64,
+) -> Result<Metrics, CoreError> {
+    check_data(geometry, gt.len(), seg.len())?;
     check_tolerance(tolerance)?;
-    let c = confusion_of(gt.data(), seg.data(), label);
-    Ok(evaluate_views(
-        gt.geometry(),
-        gt.data(),
-        seg.data(),
-        label,
-        c,
-        tolerance,
-    ))
+    let c = confusion_of(gt, seg, label);
+    Ok(evaluate_views(geometry, gt, seg, label, c, tolerance))
 }
 
 /// Metrics of two binary masks.
 pub fn evaluate_masks(gt: &Mask, seg: &Mask, tolerance: f64) -> Result<Metrics, CoreError> {
     gt.geometry().ensure_same_grid(seg.geometry())?;
-    check_tolerance(tolerance)?;
-    let c = confusion_of(gt.data(), seg.data(), true);
-    Ok(evaluate_views(
-        gt.geometry(),
-        gt.data(),
-        seg.data(),
-        true,
-        c,
-        tolerance,
-    ))
+    evaluate_label_data(gt.geometry(), gt.data(), seg.data(), true, tolerance)
 }
 
 /// Metrics of every non-zero label present in either volume. The voxel counts of
@@ -197,19 +231,23 @@ pub fn evaluate_all(
     tolerance: f64,
 ) -> Result<BTreeMap<u16, Metrics>, CoreError> {
     gt.geometry().ensure_same_grid(seg.geometry())?;
+    evaluate_all_data(gt.geometry(), gt.data(), seg.data(), tolerance)
+}
+
+/// [`evaluate_all`] on borrowed label arrays on `geometry`.
+pub fn evaluate_all_data(
+    geometry: &Geometry,
+    gt: &[u16],
+    seg: &[u16],
+    tolerance: f64,
+) -> Result<BTreeMap<u16, Metrics>, CoreError> {
+    check_data(geometry, gt.len(), seg.len())?;
     check_tolerance(tolerance)?;
-    let h = LabelHistograms::count(gt.data(), seg.data());
+    let h = LabelHistograms::count(gt, seg);
     Ok(h.labels()
         .into_iter()
         .map(|l| {
-            let m = evaluate_views(
-                gt.geometry(),
-                gt.data(),
-                seg.data(),
-                l,
-                h.confusion(l),
-                tolerance,
-            );
+            let m = evaluate_views(geometry, gt, seg, l, h.confusion(l), tolerance);
             (l, m)
         })
         .collect())
@@ -224,18 +262,24 @@ pub fn evaluate_foreground(
     tolerance: f64,
 ) -> Result<Metrics, CoreError> {
     gt.geometry().ensure_same_grid(seg.geometry())?;
+    evaluate_foreground_data(gt.geometry(), gt.data(), seg.data(), tolerance)
+}
+
+/// [`evaluate_foreground`] on borrowed arrays of any voxel type on `geometry`.
+pub fn evaluate_foreground_data<T: Copy + PartialEq + Default + Sync>(
+    geometry: &Geometry,
+    gt: &[T],
+    seg: &[T],
+    tolerance: f64,
+) -> Result<Metrics, CoreError> {
+    check_data(geometry, gt.len(), seg.len())?;
     check_tolerance(tolerance)?;
-    let c = confusion_where(gt.data(), seg.data(), |x| x != 0);
-    let dims = gt.geometry().dims;
-    let g = NonZero {
-        data: gt.data(),
-        dims,
-    };
-    let s = NonZero {
-        data: seg.data(),
-        dims,
-    };
-    Ok(evaluate_mask_views(gt.geometry(), &g, &s, c, tolerance))
+    let zero = T::default();
+    let c = confusion_where(gt, seg, |x| x != zero);
+    let dims = geometry.dims;
+    let g = NonZero { data: gt, dims };
+    let s = NonZero { data: seg, dims };
+    Ok(evaluate_mask_views(geometry, &g, &s, c, tolerance))
 }
 
 /// Only the confusion matrix of `label` (Dice, Jaccard, ... via its methods):

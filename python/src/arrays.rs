@@ -1,0 +1,250 @@
+//! numpy arrays in and out.
+//!
+//! The core stores a volume x-fastest (`i + nx * (j + ny * k)`). A numpy
+//! array indexed `[x, y, z]` in Fortran order (what nibabel returns, and what
+//! `interslice.read` returns) has exactly that layout, so it is used in place.
+//! A C-ordered `[x, y, z]` array has the layout of an x-fastest volume with
+//! the axes reversed; metrics do not depend on the order of the axes (given
+//! the spacing in the same order), so `evaluate` uses those in place too.
+//! Anything else (a strided view) is copied once.
+use crate::error;
+use numpy::ndarray::{Array3, ShapeBuilder};
+use numpy::{
+    Element, IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+use std::borrow::Cow;
+
+/// A 3-D numpy array of one of the voxel types interslice accepts.
+pub(crate) enum AnyArray<'py> {
+    Bool(PyReadonlyArray3<'py, bool>),
+    U8(PyReadonlyArray3<'py, u8>),
+    I8(PyReadonlyArray3<'py, i8>),
+    U16(PyReadonlyArray3<'py, u16>),
+    I16(PyReadonlyArray3<'py, i16>),
+    U32(PyReadonlyArray3<'py, u32>),
+    I32(PyReadonlyArray3<'py, i32>),
+    U64(PyReadonlyArray3<'py, u64>),
+    I64(PyReadonlyArray3<'py, i64>),
+    F32(PyReadonlyArray3<'py, f32>),
+    F64(PyReadonlyArray3<'py, f64>),
+}
+
+/// Run `$body` with `$a` bound to the typed array inside an [`AnyArray`].
+macro_rules! with_array {
+    ($any:expr, $a:ident => $body:expr) => {
+        match $any {
+            $crate::arrays::AnyArray::Bool($a) => $body,
+            $crate::arrays::AnyArray::U8($a) => $body,
+            $crate::arrays::AnyArray::I8($a) => $body,
+            $crate::arrays::AnyArray::U16($a) => $body,
+            $crate::arrays::AnyArray::I16($a) => $body,
+            $crate::arrays::AnyArray::U32($a) => $body,
+            $crate::arrays::AnyArray::I32($a) => $body,
+            $crate::arrays::AnyArray::U64($a) => $body,
+            $crate::arrays::AnyArray::I64($a) => $body,
+            $crate::arrays::AnyArray::F32($a) => $body,
+            $crate::arrays::AnyArray::F64($a) => $body,
+        }
+    };
+}
+pub(crate) use with_array;
+
+impl AnyArray<'_> {
+    /// numpy's name of the element type.
+    pub(crate) fn dtype_name(&self) -> &'static str {
+        match self {
+            AnyArray::Bool(_) => "bool",
+            AnyArray::U8(_) => "uint8",
+            AnyArray::I8(_) => "int8",
+            AnyArray::U16(_) => "uint16",
+            AnyArray::I16(_) => "int16",
+            AnyArray::U32(_) => "uint32",
+            AnyArray::I32(_) => "int32",
+            AnyArray::U64(_) => "uint64",
+            AnyArray::I64(_) => "int64",
+            AnyArray::F32(_) => "float32",
+            AnyArray::F64(_) => "float64",
+        }
+    }
+
+    /// The shape, `(nx, ny, nz)`.
+    pub(crate) fn shape(&self) -> [usize; 3] {
+        with_array!(self, a => { let s = a.shape(); [s[0], s[1], s[2]] })
+    }
+}
+
+/// Borrow `obj` as a 3-D array; `what` names it in errors ("gt", "labels").
+pub(crate) fn any_array<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<AnyArray<'py>> {
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return Err(error(format!(
+            "{what} must be a numpy array, got {}",
+            obj.get_type().name()?
+        )));
+    };
+    if untyped.ndim() != 3 {
+        return Err(error(format!(
+            "{what} must be a 3-D array indexed [x, y, z], got shape {:?}",
+            untyped.shape()
+        )));
+    }
+    macro_rules! try_type {
+        ($($t:ty => $v:ident),*) => {$(
+            if let Ok(a) = obj.cast::<PyArray3<$t>>() {
+                return Ok(AnyArray::$v(a.try_readonly().map_err(error)?));
+            }
+        )*};
+    }
+    try_type!(bool => Bool, u8 => U8, i8 => I8, u16 => U16, i16 => I16, u32 => U32,
+        i32 => I32, u64 => U64, i64 => I64, f32 => F32, f64 => F64);
+    Err(error(format!(
+        "{what} has an unsupported element type {} (expected bool, integers or float32/float64)",
+        untyped.dtype()
+    )))
+}
+
+/// How a borrowed array's voxels are laid out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Order {
+    /// x-fastest with dims `(nx, ny, nz)`: a Fortran-ordered `[x, y, z]` array.
+    XFast,
+    /// x-fastest with dims `(nz, ny, nx)`: a C-ordered `[x, y, z]` array.
+    Reversed,
+}
+
+/// The voxels of an array in one [`Order`], borrowed when its memory already
+/// is in that order, else copied.
+pub(crate) struct Voxels<'a, T: Clone> {
+    pub data: Cow<'a, [T]>,
+    /// Dims of `data` read x-fastest (reversed for [`Order::Reversed`]).
+    pub dims: [usize; 3],
+}
+
+/// The order an array's memory is in, when it is contiguous.
+pub(crate) fn memory_order<T: Element>(a: &PyReadonlyArray3<'_, T>) -> Option<Order> {
+    if a.is_fortran_contiguous() {
+        Some(Order::XFast)
+    } else if a.is_c_contiguous() {
+        Some(Order::Reversed)
+    } else {
+        None
+    }
+}
+
+/// The voxels of `a` in `want` order, or in place in whichever order its
+/// memory has when `want` is `None`.
+pub(crate) fn voxels<'a, T: Element + Copy>(
+    a: &'a PyReadonlyArray3<'_, T>,
+    want: Option<Order>,
+) -> Voxels<'a, T> {
+    let s = a.shape();
+    let shape = [s[0], s[1], s[2]];
+    let have = memory_order(a);
+    let order = want.or(have).unwrap_or(Order::XFast);
+    let dims = match order {
+        Order::XFast => shape,
+        Order::Reversed => [shape[2], shape[1], shape[0]],
+    };
+    if have == Some(order)
+        && let Ok(slice) = a.as_slice()
+    {
+        return Voxels {
+            data: Cow::Borrowed(slice),
+            dims,
+        };
+    }
+    let view = a.as_array();
+    let data: Vec<T> = match order {
+        // The transposed view iterates (z, y, x) with x fastest.
+        Order::XFast => view.t().iter().copied().collect(),
+        Order::Reversed => view.iter().copied().collect(),
+    };
+    Voxels {
+        data: Cow::Owned(data),
+        dims,
+    }
+}
+
+/// A voxel type that may hold a label (an integer 0..=65535).
+pub(crate) trait LabelValue: Copy {
+    /// The label, or `None` when the value is not one.
+    fn label(self) -> Option<u16>;
+}
+macro_rules! label_int {
+    ($($t:ty),*) => {$(impl LabelValue for $t {
+        #[inline]
+        fn label(self) -> Option<u16> { u16::try_from(self).ok() }
+    })*};
+}
+label_int!(u8, i8, u16, i16, u32, i32, u64, i64);
+impl LabelValue for bool {
+    #[inline]
+    fn label(self) -> Option<u16> {
+        Some(u16::from(self))
+    }
+}
+macro_rules! label_float {
+    ($($t:ty),*) => {$(impl LabelValue for $t {
+        #[inline]
+        fn label(self) -> Option<u16> {
+            (self.is_finite() && self >= 0.0 && self <= 65535.0 && self.fract() == 0.0)
+                .then_some(self as u16)
+        }
+    })*};
+}
+label_float!(f32, f64);
+
+/// Label values as u16 (a copy); errs on the first value that is not a label.
+pub(crate) fn to_u16<T: LabelValue + Sync>(data: &[T], what: &str) -> PyResult<Vec<u16>> {
+    use rayon::prelude::*;
+    data.par_iter()
+        .map(|v| v.label())
+        .collect::<Option<Vec<u16>>>()
+        .ok_or_else(|| {
+            error(format!(
+                "{what} must hold integer labels 0..=65535 (0 = background)"
+            ))
+        })
+}
+
+/// A Fortran-ordered `[x, y, z]` numpy array owning `data` (x-fastest), no copy.
+pub(crate) fn to_numpy<T: Element>(
+    py: Python<'_>,
+    data: Vec<T>,
+    dims: [usize; 3],
+) -> PyResult<Bound<'_, PyArray3<T>>> {
+    let a = Array3::from_shape_vec((dims[0], dims[1], dims[2]).f(), data).map_err(error)?;
+    Ok(a.into_pyarray(py))
+}
+
+/// A label value as the element type of an array (`None` when the type
+/// cannot hold it, so no voxel can equal it).
+pub(crate) trait FromLabel: Sized {
+    fn from_label(l: u16) -> Option<Self>;
+}
+macro_rules! from_label_int {
+    ($($t:ty),*) => {$(impl FromLabel for $t {
+        fn from_label(l: u16) -> Option<Self> { <$t>::try_from(l).ok() }
+    })*};
+}
+from_label_int!(u8, i8, u16, i16, u32, i32, u64, i64);
+impl FromLabel for bool {
+    fn from_label(l: u16) -> Option<Self> {
+        match l {
+            0 => Some(false),
+            1 => Some(true),
+            _ => None,
+        }
+    }
+}
+impl FromLabel for f32 {
+    fn from_label(l: u16) -> Option<Self> {
+        Some(f32::from(l))
+    }
+}
+impl FromLabel for f64 {
+    fn from_label(l: u16) -> Option<Self> {
+        Some(f64::from(l))
+    }
+}

@@ -1,0 +1,122 @@
+//! `interpolate` and `methods`.
+use crate::arrays::{AnyArray, FromLabel, any_array, to_numpy, with_array};
+use crate::metrics::{labels_u16, spacing3};
+use crate::volumes::geometry;
+use crate::{error, parse_axis};
+use interslice_core::{LabelVolume, LengthUnit, Volume};
+use interslice_interp::drawn::nonempty_slices;
+use interslice_interp::{DEFAULT_METHOD, by_name, interpolate_labels};
+use numpy::{Element, PyReadonlyArray3};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// Interpolate the slices between the drawn slices of a label array, as
+/// `interslice interpolate` does (the same result voxel for voxel).
+///
+/// `labels` is indexed `[x, y, z]` (any integer or bool dtype, 0 =
+/// background); its drawn slices along `axis` (0/1/2 or "x"/"y"/"z",
+/// default z) carry the tracing. `drawn` lists the drawn slice indices (a
+/// listed slice without a label is known to be empty); without it, the
+/// slices holding any non-zero voxel are the drawn ones. Every label is
+/// interpolated on its own and painted in ascending order. `spacing` is
+/// `(sx, sy, sz)`; `method` names one of `methods()` (default: the best
+/// measured one). `image` is the intensity array on the same grid, for
+/// image-aware methods. Returns a new Fortran-ordered array of the input's
+/// dtype; the drawn slices are reproduced exactly. The GIL is released
+/// while the interpolation runs.
+#[pyfunction]
+#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn interpolate<'py>(
+    py: Python<'py>,
+    labels: &Bound<'py, PyAny>,
+    drawn: Option<Vec<i64>>,
+    axis: Option<&Bound<'py, PyAny>>,
+    spacing: Vec<f64>,
+    image: Option<&Bound<'py, PyAny>>,
+    method: Option<&str>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let axis = match axis {
+        Some(a) => parse_axis(a)?,
+        None => interslice_core::Axis::Z,
+    };
+    let spacing = spacing3(spacing)?;
+    let a = any_array(labels, "labels")?;
+    let dims = a.shape();
+    if let Some(img) = image {
+        let i = any_array(img, "image")?;
+        if i.shape() != dims {
+            return Err(error(format!(
+                "image and labels differ: shape {:?} vs {dims:?}",
+                i.shape()
+            )));
+        }
+        return Err(error(
+            "no image-aware interpolation method is available in this build",
+        ));
+    }
+    let method = by_name(method.unwrap_or(DEFAULT_METHOD)).map_err(error)?;
+    let g = geometry(dims, spacing, LengthUnit::Unknown)?;
+    let data = labels_u16(py, &a, "labels")?;
+    let sparse: LabelVolume = Volume::from_vec(g, data).map_err(error)?;
+    let count = sparse.slice_count(axis) as i64;
+    let drawn: Option<Vec<usize>> = drawn
+        .map(|d| {
+            d.into_iter()
+                .map(|i| {
+                    usize::try_from(i)
+                        .ok()
+                        .filter(|&u| (u as i64) < count)
+                        .ok_or_else(|| {
+                            error(format!(
+                                "drawn slice {axis}={i} is out of range (0..{count})"
+                            ))
+                        })
+                })
+                .collect::<PyResult<Vec<usize>>>()
+        })
+        .transpose()?;
+    let result = py
+        .detach(|| {
+            let drawn = drawn.unwrap_or_else(|| nonempty_slices(&sparse, axis));
+            interpolate_labels(method.as_ref(), &sparse, axis, &drawn)
+        })
+        .map_err(error)?;
+    let (_, out) = result.into_parts();
+    Ok(match a {
+        AnyArray::U16(_) => to_numpy(py, out, dims)?.into_any(),
+        ref other => with_array!(other, x => like(py, x, &out, dims)?),
+    })
+}
+
+/// `labels` as an array of the element type of `_like` (every label fits:
+/// they come from that array).
+fn like<'py, T: Element + FromLabel + Default>(
+    py: Python<'py>,
+    _like: &PyReadonlyArray3<'_, T>,
+    labels: &[u16],
+    dims: [usize; 3],
+) -> PyResult<Bound<'py, PyAny>> {
+    let data: Vec<T> = labels
+        .iter()
+        .map(|&l| T::from_label(l).unwrap_or_default())
+        .collect();
+    Ok(to_numpy(py, data, dims)?.into_any())
+}
+
+/// The interpolation methods, the default first: a list of
+/// `{"name", "description", "default"}` (what `interslice interpolate
+/// --list` prints).
+#[pyfunction]
+pub fn methods(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    interslice_interp::methods()
+        .iter()
+        .map(|m| {
+            let d = PyDict::new(py);
+            d.set_item("name", m.name())?;
+            d.set_item("description", m.description())?;
+            d.set_item("default", m.name() == DEFAULT_METHOD)?;
+            Ok(d)
+        })
+        .collect()
+}

@@ -1,0 +1,59 @@
+"""`interpolate` gives the command line's output voxel for voxel."""
+
+import numpy as np
+import pytest
+
+import interslice
+
+
+def drawn_list(path):
+    return [int(line) for line in path.read_text().split() if line.strip()]
+
+
+def test_methods_list_the_default_first(cli):
+    ms = interslice.methods()
+    assert ms[0]["name"] == interslice.DEFAULT_METHOD and ms[0]["default"]
+    assert sum(m["default"] for m in ms) == 1
+    listed = [line.split()[0] for line in cli("interpolate", "--list").stdout.splitlines() if line.strip()]
+    assert [m["name"] for m in ms] == listed
+
+
+@pytest.mark.parametrize("method", [None, "linear", "shape-based"])
+def test_interpolate_equals_the_cli(tmp_path, cli, phantom_files, method):
+    f = phantom_files
+    out = tmp_path / "full.nii.gz"
+    args = ["interpolate", f["sparse"], "--drawn", f["drawn"], "--out", out]
+    if method:
+        args += ["--method", method]
+    cli(*args)
+    want, _ = interslice.read(out)
+    sparse, meta = interslice.read(f["sparse"])
+    got = interslice.interpolate(sparse, drawn=drawn_list(f["drawn"]), axis="z", spacing=meta["spacing"], method=method)
+    assert got.dtype == sparse.dtype
+    np.testing.assert_array_equal(got, want)
+    # The drawn slices are kept exactly.
+    d = drawn_list(f["drawn"])
+    np.testing.assert_array_equal(got[:, :, d], sparse[:, :, d])
+
+
+def test_without_drawn_the_nonempty_slices_are_drawn(tmp_path, cli, phantom_files):
+    f = phantom_files
+    cli("interpolate", f["sparse"], "--out", tmp_path / "a.nii.gz", "--method", "linear")
+    sparse, meta = interslice.read(f["sparse"])
+    got = interslice.interpolate(sparse, spacing=meta["spacing"], method="linear")
+    np.testing.assert_array_equal(got, interslice.read(tmp_path / "a.nii.gz")[0])
+
+
+def test_other_axes_dtypes_and_layouts(tmp_path, cli, phantom_files):
+    labels, meta = interslice.read(phantom_files["labels"])
+    sparse = np.zeros_like(labels)
+    drawn = list(range(2, labels.shape[0], 6))
+    sparse[drawn] = labels[drawn]
+    interslice.write(tmp_path / "sx.nii.gz", sparse, meta)
+    (tmp_path / "d.txt").write_text("\n".join(map(str, drawn)))
+    cli("interpolate", tmp_path / "sx.nii.gz", "--axis", "x", "--drawn", tmp_path / "d.txt", "--out", tmp_path / "o.nii.gz")
+    want, _ = interslice.read(tmp_path / "o.nii.gz")
+    for arr in (sparse, np.ascontiguousarray(sparse), sparse.astype(np.int32), sparse.astype(np.uint16)):
+        got = interslice.interpolate(arr, drawn=drawn, axis=0, spacing=meta["spacing"])
+        assert got.dtype == arr.dtype
+        np.testing.assert_array_equal(got, want)
