@@ -164,7 +164,9 @@ impl Components {
 
     /// The component with this name (case-insensitive).
     pub fn by_name(&self, name: &str) -> Option<&Component> {
-        self.0.iter().find(|c| c.name.eq_ignore_ascii_case(name.trim()))
+        self.0
+            .iter()
+            .find(|c| c.name.eq_ignore_ascii_case(name.trim()))
     }
 
     /// A label given on a command line or in a request: a number (any label

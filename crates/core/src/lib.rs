@@ -7,8 +7,8 @@
 #![deny(missing_docs)]
 
 pub mod cancel;
-pub mod contour;
 pub mod components;
+pub mod contour;
 pub mod contour_file;
 pub mod edt;
 pub mod error;

@@ -58,10 +58,13 @@ pub fn read_components(dir: &Path) -> anyhow::Result<Option<Components>> {
     f.take(MAX_BYTES + 1)
         .read_to_string(&mut text)
         .with_context(|| format!("cannot read {}", path.display()))?;
-    anyhow::ensure!(text.len() as u64 <= MAX_BYTES, "{}: over 1 MiB", path.display());
-    let file: ProjectFile = toml::from_str(&text).map_err(|e| {
-        anyhow::anyhow!("{}: {}", path.display(), e.message().replace('\n', " "))
-    })?;
+    anyhow::ensure!(
+        text.len() as u64 <= MAX_BYTES,
+        "{}: over 1 MiB",
+        path.display()
+    );
+    let file: ProjectFile = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message().replace('\n', " ")))?;
     if file.components.is_empty() {
         return Ok(None);
     }
@@ -140,7 +143,11 @@ mod tests {
         let e = format!("{:#}", read_components(dir.path()).unwrap_err());
         assert!(e.contains("interslice.toml"), "{e}");
         assert_eq!(e.lines().count(), 1, "{e}");
-        std::fs::write(path_in(dir.path()), "[[components]]\nname = \"a\"\n[[components]]\nname = \"A\"\n").unwrap();
+        std::fs::write(
+            path_in(dir.path()),
+            "[[components]]\nname = \"a\"\n[[components]]\nname = \"A\"\n",
+        )
+        .unwrap();
         let e = format!("{:#}", read_components(dir.path()).unwrap_err());
         assert!(e.contains("declared twice"), "{e}");
     }

@@ -49,7 +49,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.labels || to_seg_nrrd || !components.is_empty() {
         let v = args.series.read_labels(&args.input)?;
         if to_seg_nrrd || !components.is_empty() {
-            for f in segmentation::write_segmentation(&args.output, &v, &components)?.iter().skip(1) {
+            for f in segmentation::write_segmentation(&args.output, &v, &components)?
+                .iter()
+                .skip(1)
+            {
                 println!("wrote {}", f.display());
             }
         } else {

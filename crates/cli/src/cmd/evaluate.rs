@@ -66,7 +66,11 @@ fn check_geometry(gt: &LabelVolume, seg: &LabelVolume) -> Result<()> {
 
 /// Run the command.
 pub fn run(mut a: Args) -> Result<()> {
-    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.ground_truth, &a.segmentation])).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve(&[&a.ground_truth, &a.segmentation]))
+        .transpose()?;
     if !(a.tolerance.is_finite() && a.tolerance >= 0.0) {
         bail!(
             "--tolerance must be a finite number >= 0, got {}",

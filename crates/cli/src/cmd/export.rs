@@ -45,7 +45,11 @@ pub fn run(mut a: Args) -> Result<()> {
     config.db = a.db.clone();
     let state = AppState::open(&config)?;
     let components = state.store.components()?;
-    a.label = a.label_arg.as_ref().map(|l| l.resolve_in(&components)).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve_in(&components))
+        .transpose()?;
     let path = state.cell_path(&a.cell)?;
     let user = state
         .store
@@ -78,9 +82,8 @@ pub fn run(mut a: Args) -> Result<()> {
         }
         // A .seg.nrrd carries the component table; any other label volume
         // gets an ITK-SNAP label description file beside it.
-        let written =
-            interslice_io::segmentation::write_segmentation(&a.out, &labels, &components)
-                .with_context(|| format!("writing {}", a.out.display()))?;
+        let written = interslice_io::segmentation::write_segmentation(&a.out, &labels, &components)
+            .with_context(|| format!("writing {}", a.out.display()))?;
         for f in written.iter().skip(1) {
             eprintln!("wrote {}", f.display());
         }

@@ -55,7 +55,11 @@ pub struct Args {
 
 /// Run `mesh`.
 pub fn run(mut a: Args) -> Result<()> {
-    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.labels])).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve(&[&a.labels]))
+        .transpose()?;
     let mut format = MeshFormat::of_path(&a.out)?;
     if a.ascii {
         if format != MeshFormat::PlyBinary {

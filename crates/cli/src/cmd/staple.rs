@@ -69,7 +69,11 @@ fn finite(x: f64) -> Option<f64> {
 
 /// Run the command.
 pub fn run(mut a: Args) -> Result<()> {
-    a.label = a.label_arg.as_ref().map(|l| l.resolve(&a.raters.iter().map(|p| p.as_path()).collect::<Vec<_>>())).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve(&a.raters.iter().map(|p| p.as_path()).collect::<Vec<_>>()))
+        .transpose()?;
     if a.raters.len() > MAX_RATERS {
         bail!(
             "STAPLE takes at most {MAX_RATERS} raters, got {}",

@@ -94,7 +94,11 @@ const PLOTTED: &[(&str, &str, bool)] = &[
 
 /// Run `study`.
 pub fn run(mut a: Args) -> Result<()> {
-    a.label = a.label_arg.as_ref().map(|l| l.resolve(&[&a.ground_truth])).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve(&[&a.ground_truth]))
+        .transpose()?;
     let skips = parse_skips(&a.skips)?;
     let gt = interslice_io::read_labels(&a.ground_truth)
         .with_context(|| format!("reading {}", a.ground_truth.display()))?;

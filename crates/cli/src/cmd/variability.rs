@@ -214,7 +214,11 @@ pub fn run(mut a: Args) -> Result<()> {
     }
     let store = Store::open(&db).with_context(|| format!("opening {}", db.display()))?;
     let components = store.components()?;
-    a.label = a.label_arg.as_ref().map(|l| l.resolve_in(&components)).transpose()?;
+    a.label = a
+        .label_arg
+        .as_ref()
+        .map(|l| l.resolve_in(&components))
+        .transpose()?;
     let method = interslice_server::api::method_by_name(a.method.as_deref())
         .map_err(|e| anyhow::anyhow!("{}", e.message))?;
     // A command runs to its end (Ctrl-C ends the process): nothing cancels it.

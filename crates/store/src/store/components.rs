@@ -14,8 +14,13 @@ impl Store {
             .labels()?
             .into_iter()
             .map(|l| {
-                let color = parse_hex_color(&l.color).map_err(|e| StoreError::Invalid(e.to_string()))?;
-                Ok(Component { value: l.id, name: l.name, color })
+                let color =
+                    parse_hex_color(&l.color).map_err(|e| StoreError::Invalid(e.to_string()))?;
+                Ok(Component {
+                    value: l.id,
+                    name: l.name,
+                    color,
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         Components::new(list).map_err(|e| StoreError::Invalid(e.to_string()))
@@ -92,8 +97,16 @@ mod tests {
         let s = Store::open_in_memory().unwrap();
         s.sync_components(&Components::from_names("Tumour,Oedema").unwrap())
             .unwrap();
-        let names: Vec<(u16, String)> = s.labels().unwrap().into_iter().map(|l| (l.id, l.name)).collect();
-        assert_eq!(names, [(1, "Tumour".to_string()), (2, "Oedema".to_string())]);
+        let names: Vec<(u16, String)> = s
+            .labels()
+            .unwrap()
+            .into_iter()
+            .map(|l| (l.id, l.name))
+            .collect();
+        assert_eq!(
+            names,
+            [(1, "Tumour".to_string()), (2, "Oedema".to_string())]
+        );
         // Back to the cell-CT set: names and colours follow the values.
         s.sync_components(&Components::cell_ct()).unwrap();
         let labels = s.labels().unwrap();
