@@ -659,8 +659,10 @@ fn hostile_files_give_one_line_errors() {
     img.cols = 60000;
     write(&file, &img);
     let e = err(&case, None);
+    // Refused before any pixel memory: by the read limits (2^31 voxels) or
+    // because the file is too short for what its header claims.
     assert!(
-        e.contains("file is truncated") && e.contains("x.dcm"),
+        (e.contains("file is truncated") && e.contains("x.dcm")) || e.contains("too large"),
         "{e}"
     );
     let mut img = Img::new([0.0; 3], samples(0));
