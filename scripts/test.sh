@@ -14,7 +14,7 @@ export WEB_BUILT=1
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
-cargo test --workspace
+cargo test --workspace --no-fail-fast
 for t in scripts/test-*.sh; do
   [ -e "$t" ] || continue
   echo "== $t"
