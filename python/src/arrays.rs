@@ -188,7 +188,7 @@ macro_rules! label_float {
     ($($t:ty),*) => {$(impl LabelValue for $t {
         #[inline]
         fn label(self) -> Option<u16> {
-            (self.is_finite() && self >= 0.0 && self <= 65535.0 && self.fract() == 0.0)
+            (self.is_finite() && (0.0..=65535.0).contains(&self) && self.fract() == 0.0)
                 .then_some(self as u16)
         }
     })*};

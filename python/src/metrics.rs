@@ -364,7 +364,9 @@ pub fn staple<'py>(
             vols.push(Volume::from_vec(g.clone(), m).map_err(error)?);
         }
         let refs: Vec<&Mask> = vols.iter().collect();
-        let s = interslice_core::staple::staple(&refs, params).map_err(error)?;
+        // A Python call runs to its end (no cancellation from Python yet).
+        let s = interslice_core::staple::staple(&refs, params, &interslice_core::Cancel::new())
+            .map_err(error)?;
         let consensus: Vec<u8> = s.consensus.data().iter().map(|&b| u8::from(b)).collect();
         let stats = StapleStats {
             label,

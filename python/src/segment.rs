@@ -78,7 +78,9 @@ pub fn threshold<'py>(
             )));
         }
     };
-    let seg = py.detach(|| segment_detailed(&v, &p)).map_err(error)?;
+    let seg = py
+        .detach(|| segment_detailed(&v, &p, &interslice_core::Cancel::new()))
+        .map_err(error)?;
     let summary = to_py(py, &seg.summary(&p))?;
     let (_, labels) = seg.labels.into_parts();
     let labels = if labels.iter().all(|&l| l <= u16::from(u8::MAX)) {
