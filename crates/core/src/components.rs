@@ -80,9 +80,13 @@ impl Component {
 
     /// The colour as `#rrggbb`.
     pub fn hex_color(&self) -> String {
-        let [r, g, b] = self.color;
-        format!("#{r:02x}{g:02x}{b:02x}")
+        to_hex_color(self.color)
     }
+}
+
+/// An sRGB colour as `#rrggbb` (lower case).
+pub fn to_hex_color([r, g, b]: [u8; 3]) -> String {
+    format!("#{r:02x}{g:02x}{b:02x}")
 }
 
 /// Parse `#rrggbb` (case-insensitive).

@@ -4,6 +4,7 @@ use super::audit::audit;
 use crate::model::{CellRecord, CellStatus, Label, Progress};
 use crate::{Result, StoreError, now_rfc3339};
 use interslice_core::Geometry;
+use interslice_core::components;
 use rusqlite::{OptionalExtension, Transaction, params};
 use std::collections::HashMap;
 
@@ -202,21 +203,17 @@ impl Store {
         user_id: Option<i64>,
     ) -> Result<Label> {
         let name = name.trim();
-        if name.is_empty() || name.chars().count() > 64 {
-            return Err(StoreError::Invalid(
-                "a label name has 1 to 64 characters".into(),
-            ));
+        if name.is_empty() || name.chars().count() > components::MAX_NAME_CHARS {
+            return Err(StoreError::Invalid(format!(
+                "a label name has 1 to {} characters",
+                components::MAX_NAME_CHARS
+            )));
         }
-        if let Some(c) = color
-            && !(c.len() == 7
-                && c.starts_with('#')
-                && c[1..].chars().all(|ch| ch.is_ascii_hexdigit()))
-        {
-            return Err(StoreError::Invalid(format!("colour '{c}' is not #rrggbb")));
+        if let Some(c) = color {
+            components::parse_hex_color(c).map_err(|e| StoreError::Invalid(e.to_string()))?;
         }
-        const PALETTE: [&str; 8] = [
-            "#911eb4", "#42d4f4", "#f032e6", "#bfef45", "#fabed4", "#469990", "#dcbeff", "#9a6324",
-        ];
+        // Added labels take the palette's colours after the cell-CT four.
+        let palette = &components::PALETTE[4..];
         self.write(|tx| {
             let exists = tx
                 .prepare_cached("SELECT 1 FROM labels WHERE name = ?1")?
@@ -232,9 +229,10 @@ impl Store {
             if id > 65535 {
                 return Err(StoreError::Invalid("no label ids left".into()));
             }
-            let color = color
-                .map(str::to_ascii_lowercase)
-                .unwrap_or_else(|| PALETTE[(id as usize) % PALETTE.len()].to_string());
+            let color = color.map(str::to_ascii_lowercase).unwrap_or_else(|| {
+                let [r, g, b] = palette[(id as usize) % palette.len()];
+                format!("#{r:02x}{g:02x}{b:02x}")
+            });
             tx.prepare_cached("INSERT INTO labels (id, name, color) VALUES (?1, ?2, ?3)")?
                 .execute(params![id, name, color])?;
             audit(
