@@ -160,7 +160,11 @@ impl std::fmt::Display for LoadReport {
             mb(self.space.contours_bytes),
             self.space.database_bytes as f64 / self.space.contours_bytes.max(1) as f64,
             mb(self.space.wal_bytes)
-        )
+        )?;
+        for (name, bytes) in self.space.by_object.iter().take(8) {
+            writeln!(f, "  {name}: {:.2} MiB", mb(*bytes))?;
+        }
+        Ok(())
     }
 }
 
@@ -223,14 +227,32 @@ struct ClientResult {
     error_samples: Vec<String>,
 }
 
-/// A square contour whose corners are multiples of 0.25 (exact in JSON).
-fn square(x0: f64, y0: f64, side: f64) -> Vec<[f64; 2]> {
-    vec![
-        [x0, y0],
-        [x0 + side, y0],
-        [x0 + side, y0 + side],
-        [x0, y0 + side],
-    ]
+/// Points of a traced outline: a pen stroke as the web UI sends it
+/// ([`STROKE_POINTS`] points at full `f64` precision) around the circle
+/// inscribed in the square with corner (`x0`, `y0`) and side `side`. Real
+/// strokes, not 4-corner squares, so that the space figures weigh history
+/// against tracing as a lab's database does.
+fn stroke(x0: f64, y0: f64, side: f64) -> Vec<[f64; 2]> {
+    let r = side / 2.0;
+    (0..STROKE_POINTS)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / STROKE_POINTS as f64;
+            [x0 + r + r * a.cos(), y0 + r + r * a.sin()]
+        })
+        .collect()
+}
+
+/// Points per traced outline in the load test (a nucleus traced with a pen
+/// and smoothed is 50-200 points).
+const STROKE_POINTS: usize = 64;
+
+/// The pen pressure and time stamps of a [`stroke`], as the web UI sends them.
+fn pen_samples(seq: u64) -> (Vec<f64>, Vec<f64>) {
+    let pressure = (0..STROKE_POINTS)
+        .map(|i| 0.3 + 0.4 * ((i as u64 + seq) % 8) as f64 / 8.0)
+        .collect();
+    let times = (0..STROKE_POINTS).map(|i| i as f64 * 8.333).collect();
+    (pressure, times)
 }
 
 fn ids_points(v: &serde_json::Value) -> Option<(i64, Vec<[f64; 2]>)> {
@@ -297,7 +319,7 @@ fn trace(base: &str, plan: Plan) -> ClientResult {
         let cs: Vec<serde_json::Value> = (0..preload)
             .map(|i| {
                 let x = 1.0 + (i % (room as usize * 4)) as f64 * 0.25;
-                serde_json::json!({"points": square(x, x, 2.0)})
+                serde_json::json!({"points": stroke(x, x, 2.0)})
             })
             .collect();
         let answer = client.json(
@@ -353,20 +375,24 @@ fn trace(base: &str, plan: Plan) -> ClientResult {
         };
         let t = Instant::now();
         let answer = match op {
-            "add" => client.json(
-                "POST",
-                &contours,
-                &serde_json::json!({
-                    "label": label, "axis": "z", "index": slice,
-                    "points": square(x0, y0, 4.0), "tool": "loadtest",
-                    "client_id": format!("{user}-{seq}"),
-                }),
-            ),
+            "add" => {
+                let (pressure, times_ms) = pen_samples(seq);
+                client.json(
+                    "POST",
+                    &contours,
+                    &serde_json::json!({
+                        "label": label, "axis": "z", "index": slice,
+                        "points": stroke(x0, y0, 4.0), "pressure": pressure,
+                        "times_ms": times_ms, "tool": "loadtest",
+                        "client_id": format!("{user}-{seq}"),
+                    }),
+                )
+            }
             "replace" => client.json(
                 "PUT",
                 &format!("/api/cells/{cell}/slices/z/{slice}/contours"),
                 &serde_json::json!({"label": label, "contours": [
-                    {"points": square(x0, y0, 3.0)}, {"points": square(x0 + 0.5, y0, 2.0)}
+                    {"points": stroke(x0, y0, 3.0)}, {"points": stroke(x0 + 0.5, y0, 2.0)}
                 ]}),
             ),
             "delete" => {

@@ -302,7 +302,7 @@ pub struct Progress {
 }
 
 /// The space a database takes on disk.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct SpaceUsage {
     /// Pages of the database (its file size once the WAL is checkpointed).
     pub database_bytes: u64,
@@ -310,4 +310,7 @@ pub struct SpaceUsage {
     pub contours_bytes: u64,
     /// The write-ahead log file (0 in memory).
     pub wal_bytes: u64,
+    /// Every table and index with its pages in bytes, largest first: where
+    /// the space goes.
+    pub by_object: Vec<(String, u64)>,
 }

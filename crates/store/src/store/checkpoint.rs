@@ -14,7 +14,9 @@ use std::time::Duration;
 /// the WAL grows without end (SQLite rewinds it only when a write starts after
 /// a complete checkpoint, and never shrinks the file unless told to). Once the
 /// file passes the limit, a TRUNCATE checkpoint waits for the writer's current
-/// transaction, copies everything and empties the file.
+/// transaction, copies everything and empties the file. The file's size is
+/// looked at every [`Self::SIZE_CHECK`] (one `stat`), because a busy server
+/// writes tens of MiB to the WAL within one checkpoint period.
 pub(super) struct Checkpointer {
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
@@ -23,6 +25,8 @@ pub(super) struct Checkpointer {
 impl Checkpointer {
     /// How often the WAL is checkpointed.
     const PERIOD: Duration = Duration::from_millis(500);
+    /// How often the WAL's size is compared with the limit.
+    const SIZE_CHECK: Duration = Duration::from_millis(50);
 
     /// Start checkpointing the database at `path`, truncating its WAL once
     /// the file exceeds `wal_limit` bytes.
@@ -39,11 +43,15 @@ impl Checkpointer {
         let thread = std::thread::Builder::new()
             .name("sqlite-checkpoint".into())
             .spawn(move || {
+                let mut last_passive = std::time::Instant::now();
                 while !flag.load(Ordering::Acquire) {
-                    std::thread::park_timeout(Self::PERIOD);
-                    // PASSIVE never waits for readers or the writer; a busy
-                    // or failed round is simply retried on the next tick.
-                    let _ = conn.query_row("PRAGMA wal_checkpoint(PASSIVE)", [], |_| Ok(()));
+                    std::thread::park_timeout(Self::SIZE_CHECK);
+                    if last_passive.elapsed() >= Self::PERIOD {
+                        // PASSIVE never waits for readers or the writer; a
+                        // busy or failed round is retried on the next period.
+                        let _ = conn.query_row("PRAGMA wal_checkpoint(PASSIVE)", [], |_| Ok(()));
+                        last_passive = std::time::Instant::now();
+                    }
                     if std::fs::metadata(&wal).is_ok_and(|m| m.len() > wal_limit) {
                         // Waits (busy timeout) for the writer; a failed round
                         // is retried on the next tick.

@@ -178,6 +178,10 @@ impl Store {
             [],
             |r| r.get(0),
         )?;
+        let by_object: Vec<(String, u64)> = conn
+            .prepare("SELECT name, SUM(pgsize) AS b FROM dbstat GROUP BY name ORDER BY b DESC")?
+            .query_map([], |r| Ok((r.get::<_, String>(0)?, r.get::<_, i64>(1)? as u64)))?
+            .collect::<rusqlite::Result<_>>()?;
         let wal_bytes = match &self.path {
             Some(p) => {
                 let mut wal = p.as_os_str().to_owned();
@@ -190,6 +194,7 @@ impl Store {
             database_bytes: (page_size * pages) as u64,
             contours_bytes: contours as u64,
             wal_bytes,
+            by_object,
         })
     }
 
