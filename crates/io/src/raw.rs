@@ -230,23 +230,34 @@ pub fn decode_volume(
                     Volume::from_vec(geometry, decode(path, bytes, endian, |a| wide(a) as i16)?)
                         .map_err(bad)?,
                 )
+            } else if lo >= -F32_EXACT_INT && hi <= F32_EXACT_INT {
+                // Counts beyond 16 bits (photon counting, some micro-CT) are
+                // whole numbers up to 2^24 that f32 holds exactly.
+                AnyVolume::F32(
+                    Volume::from_vec(geometry, decode(path, bytes, endian, |a| wide(a) as f32)?)
+                        .map_err(bad)?,
+                )
             } else {
                 return Err(IoError::unsupported(
                     path,
                     format!(
-                        "32-bit integer values {lo}..={hi} do not fit in 16 bits (convert to float first)"
+                        "32-bit integer values {lo}..={hi} fit neither 16 bits nor exactly in 32-bit float (|value| <= 16777216)"
                     ),
                 ));
             }
         }
         RawType::F64 => {
-            if elements(bytes, endian)
+            // Rounded to the nearest f32: a relative change of at most 6e-8,
+            // far below what any scanner measures, and the only way a float64
+            // file (what most analysis packages save) can be traced on. A
+            // finite value beyond f32's range would become infinite: refused.
+            if let Some(x) = elements(bytes, endian)
                 .map(f64::from_le_bytes)
-                .any(|x| f64::from(x as f32) != x && !x.is_nan())
+                .find_any(|x| x.is_finite() && (*x as f32).is_infinite())
             {
                 return Err(IoError::unsupported(
                     path,
-                    "64-bit float values are not exact in 32-bit float",
+                    format!("64-bit float value {x:e} is beyond the 32-bit float range (±3.4e38)"),
                 ));
             }
             AnyVolume::F32(
@@ -260,6 +271,9 @@ pub fn decode_volume(
     };
     Ok(v)
 }
+
+/// The largest whole number every f32 holds exactly (2^24).
+const F32_EXACT_INT: i64 = 1 << 24;
 
 /// The voxels of a volume as little-endian bytes, x-fastest.
 pub fn encode_le(v: &AnyVolume) -> Vec<u8> {
