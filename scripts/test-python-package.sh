@@ -14,6 +14,10 @@ repo="$PWD"
 target="${CARGO_TARGET_DIR:-$repo/target}"
 mkdir -p "$target"
 target="$(cd "$target" && pwd)"
+# python/ is its own workspace; building it into the main target dir reuses
+# every dependency the workspace build already compiled (same versions, same
+# dev profile) instead of compiling them all a second time in python/target.
+export CARGO_TARGET_DIR="$target"
 venv="$target/pyenv-package"
 py="$venv/bin/python"
 

@@ -25,6 +25,8 @@ enum Command {
     Convert(cmd::convert::Args),
     /// Fill the slices between drawn slices of a sparse label volume.
     Interpolate(cmd::interpolate::Args),
+    /// Which undrawn slices to trace next, best first, with the expected gain.
+    Advise(cmd::advise::Args),
     /// Drop slices of a ground truth, interpolate with every method, measure.
     Study(cmd::study::Args),
     /// The interpolation benchmark on the development data (scripts/fetch-interp-data.sh).
@@ -61,6 +63,7 @@ fn main() {
         Command::Info(a) => cmd::info::run(a),
         Command::Convert(a) => cmd::convert::run(a),
         Command::Interpolate(a) => cmd::interpolate::run(a),
+        Command::Advise(a) => cmd::advise::run(a),
         Command::Study(a) => cmd::study::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Contours(a) => cmd::contours::run(a),

@@ -5,6 +5,7 @@
 //! given explicitly: a drawn slice with no foreground is a known-empty slice.
 #![deny(missing_docs)]
 
+pub mod advise;
 pub mod aligned;
 pub mod auto;
 pub mod confidence;

@@ -1,4 +1,5 @@
 //! One module per subcommand.
+pub mod advise;
 pub mod bench;
 pub mod campaign;
 pub mod contours;

@@ -1,0 +1,379 @@
+//! Which slice to trace next: the undrawn slices ranked by how many wrong
+//! voxels tracing them is expected to correct.
+//!
+//! **The error model.** Between two drawn slices `a < b` the interpolation
+//! is exact at both ends and least sure in the middle. The expected number
+//! of wrong voxels on an undrawn slice `t` of the gap is modelled as
+//! `ρ · (t − a)(b − t) / (b − a)`, the variance profile of a random walk
+//! pinned at both ends (a Brownian bridge): the further from a drawn slice,
+//! the more the shape may have wandered. `ρ` is the gap's *rate*, in wrong
+//! voxels per slice. Summed over the gap the expected error is about
+//! `ρ L² / 6` (`L = b − a`); drawing slice `s` splits the gap into `L₁ + L₂`
+//! and leaves `ρ (L₁² + L₂²) / 6`, so the **gain** of drawing `s` is
+//! `ρ L₁ L₂ / 3` voxels: largest at the middle of the gap, and largest in
+//! the gaps where the shape is hardest to predict.
+//!
+//! **The rate of a gap** comes from the tracer's own slices:
+//! * leave-one-out (see [`crate::loo`]): each interior drawn slice is
+//!   predicted from its drawn neighbours by the method that will fill the
+//!   gaps (so with an image, the image-aware one); the prediction's wrong
+//!   voxels `e` at the middle of a span `L'` give `ρ = 4e / L'`. A gap takes
+//!   the mean rate of the held-out slices at its two ends.
+//! * the change between the gap's own two slices, `|A Δ B|`: the shape's
+//!   first derivative. Interpolation recovers a steady change, so only a
+//!   share of it counts: `ρ ≥ |A Δ B| / (4L)`, which is what decides the
+//!   outermost gaps (no held-out slice on one side) and a tracing of only
+//!   two slices.
+//!
+//! The gain also predicts the result's Dice: with `E` expected wrong voxels
+//! and a structure of `V` voxels (the drawn areas integrated along the axis,
+//! trapezoid rule), Dice ≈ `1 − E / (2V)`; the predicted gain of one more
+//! slice is `gain / (2V)`, which the "done when" hint compares with the
+//! user's threshold.
+//!
+//! Several labels share the drawn slices: a gap's rate is the sum of the
+//! labels' rates, `V` the sum of their volumes. The N best slices are chosen
+//! greedily: after each choice its gap is split (with the same rate) and the
+//! next best slice is taken, so suggestions spread over the volume.
+use crate::labels::{drawn_labels, traced_mask};
+use crate::loo::Compact;
+use crate::{InterpError, Interpolator, SparseMask};
+use interslice_core::{Axis, LabelVolume, Mask};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// One suggested slice.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Suggestion {
+    /// Slice index along the drawn axis.
+    pub slice: usize,
+    /// Wrong voxels tracing it is expected to correct.
+    pub gain_voxels: f64,
+    /// The expected rise of the result's Dice from tracing it.
+    pub dice_gain: f64,
+    /// The drawn (or already suggested) slices around it.
+    pub between: [usize; 2],
+}
+
+/// What `advise` answers: the suggestions and the predicted quality now.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Advice {
+    /// Axis of the slices.
+    pub axis: Axis,
+    /// Drawn slices the advice starts from.
+    pub drawn: Vec<usize>,
+    /// Best slice first.
+    pub suggestions: Vec<Suggestion>,
+    /// Predicted Dice of the interpolation of the current tracing.
+    pub predicted_dice: f64,
+    /// Voxels of the traced structures (the drawn areas integrated).
+    pub volume_voxels: f64,
+}
+
+/// A gap between two drawn slices and its rate (wrong voxels per slice).
+#[derive(Debug, Clone, Copy)]
+struct Gap {
+    a: usize,
+    b: usize,
+    rate: f64,
+}
+
+impl Gap {
+    /// The best slice of the gap to draw and its gain, `None` without undrawn slices.
+    fn best(&self) -> Option<(usize, f64)> {
+        (self.b - self.a >= 2).then(|| {
+            let s = self.a + (self.b - self.a) / 2;
+            (s, self.gain(s))
+        })
+    }
+
+    fn gain(&self, s: usize) -> f64 {
+        self.rate * ((s - self.a) * (self.b - s)) as f64 / 3.0
+    }
+
+    /// Expected wrong voxels over the whole gap now.
+    fn error(&self) -> f64 {
+        let l = (self.b - self.a) as f64;
+        // Σ_t (t−a)(b−t)/L over the undrawn slices = (L² − 1)/6.
+        self.rate * (l * l - 1.0) / 6.0
+    }
+}
+
+/// The per-gap rates and the volume of one label's tracing.
+fn label_rates(
+    mask: &Mask,
+    axis: Axis,
+    drawn: &[usize],
+    method: &dyn Interpolator,
+) -> Result<(Vec<f64>, f64), InterpError> {
+    let slices: Vec<Vec<bool>> = drawn
+        .iter()
+        .map(|&d| mask.slice(axis, d).map_err(InterpError::from))
+        .collect::<Result<_, _>>()?;
+    let areas: Vec<f64> = slices
+        .iter()
+        .map(|s| s.iter().filter(|&&x| x).count() as f64)
+        .collect();
+    let volume: f64 = drawn
+        .windows(2)
+        .zip(areas.windows(2))
+        .map(|(d, a)| (a[0] + a[1]) / 2.0 * (d[1] - d[0]) as f64)
+        .sum::<f64>()
+        .max(areas.iter().copied().fold(0.0, f64::max));
+    // Rates of the held-out slices (index into `drawn`).
+    let mut held_rate = vec![None; drawn.len()];
+    if drawn.len() >= 3 {
+        let compact = Compact::of(&SparseMask { mask, axis, drawn })?;
+        for h in compact.held_out(method)? {
+            let truth = &slices[h.pos];
+            let wrong = truth
+                .iter()
+                .zip(&h.predicted)
+                .filter(|(x, y)| x != y)
+                .count() as f64;
+            let span = compact.reach(h.pos) as f64 * 2.0;
+            held_rate[h.pos] = Some(4.0 * wrong / span.max(1.0));
+        }
+    }
+    let rates = (0..drawn.len() - 1)
+        .map(|g| {
+            let l = (drawn[g + 1] - drawn[g]) as f64;
+            let change = slices[g]
+                .iter()
+                .zip(&slices[g + 1])
+                .filter(|(x, y)| x != y)
+                .count() as f64;
+            let ends: Vec<f64> = [held_rate[g], held_rate[g + 1]]
+                .into_iter()
+                .flatten()
+                .collect();
+            let loo = if ends.is_empty() {
+                0.0
+            } else {
+                ends.iter().sum::<f64>() / ends.len() as f64
+            };
+            loo.max(change / (4.0 * l))
+        })
+        .collect();
+    Ok((rates, volume))
+}
+
+/// Rank the undrawn slices of `sparse` between its outermost drawn slices:
+/// the `count` best to trace next, best first (see the module docs for the
+/// model). `method` is the one that will fill the gaps; its leave-one-out
+/// errors calibrate the model. Errors with fewer than two drawn slices.
+pub fn advise(
+    sparse: &LabelVolume,
+    axis: Axis,
+    drawn: &[usize],
+    count: usize,
+    method: &dyn Interpolator,
+) -> Result<Advice, InterpError> {
+    let mut drawn = drawn.to_vec();
+    drawn.sort_unstable();
+    drawn.dedup();
+    let n = sparse.slice_count(axis);
+    if let Some(&bad) = drawn.iter().find(|&&d| d >= n) {
+        return Err(InterpError::Input(format!(
+            "drawn slice {axis}={bad} is out of range (0..{n})"
+        )));
+    }
+    if drawn.len() < 2 {
+        return Err(InterpError::Input(format!(
+            "advice needs at least two drawn slices along {axis}, got {}: trace the first \
+             and the last slice the structure shows on, then ask again",
+            drawn.len()
+        )));
+    }
+    let labels = drawn_labels(sparse, axis, &drawn);
+    let per_label: Vec<(Vec<f64>, f64)> = labels
+        .par_iter()
+        .map(|&l| {
+            let m = traced_mask(sparse, axis, &drawn, l);
+            label_rates(&m, axis, &drawn, method)
+        })
+        .collect::<Result<_, _>>()?;
+    let volume: f64 = per_label.iter().map(|(_, v)| v).sum();
+    let mut gaps: Vec<Gap> = drawn
+        .windows(2)
+        .enumerate()
+        .map(|(g, w)| Gap {
+            a: w[0],
+            b: w[1],
+            rate: per_label.iter().map(|(r, _)| r[g]).sum(),
+        })
+        .collect();
+    let scale = if volume > 0.0 {
+        1.0 / (2.0 * volume)
+    } else {
+        0.0
+    };
+    let error: f64 = gaps.iter().map(Gap::error).sum();
+    let predicted_dice = (1.0 - error * scale).clamp(0.0, 1.0);
+    let mut suggestions = Vec::new();
+    while suggestions.len() < count {
+        // The best gap; ties go to the lower slice, so the order is stable.
+        let Some((i, (s, gain))) = gaps
+            .iter()
+            .enumerate()
+            .filter_map(|(i, g)| g.best().map(|b| (i, b)))
+            .max_by(|x, y| x.1.1.total_cmp(&y.1.1).then(y.1.0.cmp(&x.1.0)))
+        else {
+            break;
+        };
+        let g = gaps[i];
+        suggestions.push(Suggestion {
+            slice: s,
+            gain_voxels: gain,
+            dice_gain: gain * scale,
+            between: [g.a, g.b],
+        });
+        gaps[i] = Gap { b: s, ..g };
+        gaps.insert(i + 1, Gap { a: s, ..g });
+    }
+    Ok(Advice {
+        axis,
+        drawn,
+        suggestions,
+        predicted_dice,
+        volume_voxels: volume,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use interslice_core::{Geometry, LengthUnit, Volume};
+
+    /// A gap model over a line: the gain is largest at the middle.
+    #[test]
+    fn the_gain_of_a_gap_peaks_at_its_middle_and_sums_to_the_error_drop() {
+        let g = Gap {
+            a: 10,
+            b: 20,
+            rate: 3.0,
+        };
+        let (s, best) = g.best().unwrap();
+        assert_eq!(s, 15);
+        for t in 11..20 {
+            assert!(g.gain(t) <= best + 1e-12);
+        }
+        // Splitting at s lowers the gap's error by about the gain.
+        let left = Gap { b: s, ..g };
+        let right = Gap { a: s, ..g };
+        let drop = g.error() - left.error() - right.error();
+        assert!(
+            (drop - best).abs() <= 0.05 * best + g.rate,
+            "{drop} vs {best}"
+        );
+        assert!(
+            Gap {
+                a: 3,
+                b: 4,
+                rate: 1.0
+            }
+            .best()
+            .is_none()
+        );
+    }
+
+    /// A cone along z (radius grows linearly, then a ball-like cap): a shape
+    /// whose cross-section changes fast near its tip.
+    fn traced(drawn: &[usize]) -> (LabelVolume, LabelVolume) {
+        let g = Geometry::new([48, 48, 40], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let mut full: LabelVolume = Volume::zeros(g);
+        for z in 0..40usize {
+            let r = if z < 30 {
+                2.0 + 0.6 * z as f64
+            } else {
+                20.0 * (1.0 - ((z - 29) as f64 / 11.0).powi(2)).max(0.0).sqrt()
+            };
+            for y in 0..48usize {
+                for x in 0..48usize {
+                    let (dx, dy) = (x as f64 - 23.5, y as f64 - 23.5);
+                    if dx * dx + dy * dy <= r * r {
+                        full.set(x, y, z, 1);
+                    }
+                }
+            }
+        }
+        let sparse = crate::protocol::sparse_of(&full, Axis::Z, drawn);
+        (full, sparse)
+    }
+
+    #[test]
+    fn suggestions_are_undrawn_distinct_inside_and_best_first() {
+        let drawn = [0, 10, 20, 30, 39];
+        let (_, sparse) = traced(&drawn);
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let a = advise(&sparse, Axis::Z, &drawn, 8, method.as_ref()).unwrap();
+        assert_eq!(a.suggestions.len(), 8);
+        let mut seen = std::collections::BTreeSet::new();
+        for s in &a.suggestions {
+            assert!(!drawn.contains(&s.slice) && s.slice > 0 && s.slice < 39);
+            assert!(seen.insert(s.slice), "slice {} twice", s.slice);
+            assert!(s.between[0] < s.slice && s.slice < s.between[1]);
+        }
+        // Greedy gains never rise: each gap's best gain is at most its parent's.
+        assert!(
+            a.suggestions
+                .windows(2)
+                .all(|w| w[1].gain_voxels <= w[0].gain_voxels + 1e-9)
+        );
+        assert!(
+            a.predicted_dice > 0.5 && a.predicted_dice < 1.0,
+            "{}",
+            a.predicted_dice
+        );
+    }
+
+    #[test]
+    fn the_first_suggestion_goes_where_the_shape_changes_fastest() {
+        // The cap (30..39) shrinks from radius 20 to 0; the cone changes slowly.
+        let drawn = [0, 10, 20, 30, 39];
+        let (_, sparse) = traced(&drawn);
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let a = advise(&sparse, Axis::Z, &drawn, 1, method.as_ref()).unwrap();
+        assert_eq!(a.suggestions[0].between, [30, 39], "{:?}", a.suggestions);
+    }
+
+    #[test]
+    fn advised_slices_beat_the_same_number_of_uniform_ones() {
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let ends = [0usize, 39];
+        let (full, _) = traced(&ends);
+        let truth = full.map(|v| v == 1);
+        let dice_of = |drawn: &[usize]| {
+            let sparse = crate::protocol::sparse_of(&full, Axis::Z, drawn);
+            let out = crate::interpolate_labels(method.as_ref(), &sparse, Axis::Z, drawn).unwrap();
+            let skipped: Vec<usize> = (0..40).filter(|s| !drawn.contains(s)).collect();
+            crate::protocol::dice_on(&out.map(|v| v == 1), &truth, Axis::Z, &skipped)
+        };
+        // The advice is re-asked after each traced slice, as a tracer would.
+        let mut advised = ends.to_vec();
+        for _ in 0..4 {
+            let sparse_now = crate::protocol::sparse_of(&full, Axis::Z, &advised);
+            let a = advise(&sparse_now, Axis::Z, &advised, 1, method.as_ref()).unwrap();
+            advised.push(a.suggestions[0].slice);
+            advised.sort_unstable();
+        }
+        let uniform = [0, 8, 16, 24, 32, 39];
+        assert_eq!(advised.len(), uniform.len());
+        let (da, du) = (dice_of(&advised), dice_of(&uniform));
+        eprintln!("advised {advised:?}: {da:.4}, uniform: {du:.4}");
+        assert!(da > du, "advised {advised:?}: {da:.4}, uniform: {du:.4}");
+    }
+
+    #[test]
+    fn fewer_than_two_drawn_slices_is_an_error_that_says_what_to_do() {
+        let (_, sparse) = traced(&[5]);
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let e = advise(&sparse, Axis::Z, &[5], 3, method.as_ref())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("at least two drawn slices") && e.contains("trace"),
+            "{e}"
+        );
+    }
+}
