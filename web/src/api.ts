@@ -152,8 +152,9 @@ export class Api {
     private fetchImpl: typeof fetch = (...a) => fetch(...a),
   ) {}
 
-  private async req(method: string, path: string, body?: unknown): Promise<Response> {
+  private async req(method: string, path: string, body?: unknown, keepalive = false): Promise<Response> {
     const init: RequestInit = { method, credentials: "same-origin", headers: {} };
+    if (keepalive) init.keepalive = true;
     if (body !== undefined) {
       init.body = JSON.stringify(body);
       (init.headers as Record<string, string>)["Content-Type"] = "application/json";
@@ -173,8 +174,8 @@ export class Api {
     return r;
   }
 
-  private async json<T>(method: string, path: string, body?: unknown): Promise<T> {
-    const r = await this.req(method, path, body);
+  private async json<T>(method: string, path: string, body?: unknown, keepalive = false): Promise<T> {
+    const r = await this.req(method, path, body, keepalive);
     if (r.status === 204) return undefined as T;
     const text = await r.text();
     if (!text) return undefined as T;
@@ -241,9 +242,12 @@ export class Api {
     const dtype = parseDtype(r.headers.get("X-Dtype"));
     return { width, height, dtype, data };
   }
-  /** POST /api/cells/{cell}/time */
-  addTime(id: string, seconds: number): Promise<{ total_seconds: number }> {
-    return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds });
+  /**
+   * POST /api/cells/{cell}/time. `keepalive`: the request outlives the page
+   * (when the screen or the tab is closed).
+   */
+  addTime(id: string, seconds: number, keepalive = false): Promise<{ total_seconds: number }> {
+    return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds }, keepalive);
   }
   /** GET /api/labels */
   labels(): Promise<Label[]> {
@@ -265,7 +269,13 @@ export class Api {
     return this.json("POST", `/api/cells/${enc(id)}/contours`, c);
   }
   /** PUT: replace a label's contours on one slice (empty list clears). */
-  replaceContours(id: string, axis: Axis, index: number, label: number, contours: Omit<NewContour, "label" | "axis" | "index">[]): Promise<unknown> {
+  replaceContours(
+    id: string,
+    axis: Axis,
+    index: number,
+    label: number,
+    contours: Omit<NewContour, "label" | "axis" | "index">[],
+  ): Promise<unknown> {
     return this.json("PUT", `/api/cells/${enc(id)}/slices/${axis}/${index}/contours`, { label, contours });
   }
   /** POST: a drawn slice without the structure. */
@@ -305,16 +315,31 @@ export class Api {
     return this.json("GET", `/api/cells/${enc(id)}/segmentations`);
   }
   /** POST: compute an automated segmentation. */
-  segment(id: string, body: { method: string; classes?: number; smooth?: number; largest_component?: boolean; fill_holes?: boolean }): Promise<Segmentation> {
+  segment(
+    id: string,
+    body: { method: string; classes?: number; smooth?: number; largest_component?: boolean; fill_holes?: boolean },
+  ): Promise<Segmentation> {
     return this.json("POST", `/api/cells/${enc(id)}/segmentations`, body);
   }
   /** POST evaluate. */
-  evaluate(id: string, body: { label: number; reference: Record<string, unknown>; test: Record<string, unknown> }): Promise<Metrics> {
+  evaluate(
+    id: string,
+    body: { label: number; reference: Record<string, unknown>; test: Record<string, unknown> },
+  ): Promise<Metrics> {
     return this.json("POST", `/api/cells/${enc(id)}/evaluate`, body);
   }
   /** GET the TN/TP/FP/FN overlay of a slice (u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN). */
-  async overlay(id: string, axis: Axis, index: number, label: number, segmentation: string | number): Promise<Uint8Array> {
-    const r = await this.req("GET", `/api/cells/${enc(id)}/overlay/${axis}/${index}?label=${label}&segmentation=${enc(String(segmentation))}`);
+  async overlay(
+    id: string,
+    axis: Axis,
+    index: number,
+    label: number,
+    segmentation: string | number,
+  ): Promise<Uint8Array> {
+    const r = await this.req(
+      "GET",
+      `/api/cells/${enc(id)}/overlay/${axis}/${index}?label=${label}&segmentation=${enc(String(segmentation))}`,
+    );
     return new Uint8Array(await r.arrayBuffer());
   }
   /** GET ratings. */
