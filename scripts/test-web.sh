@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The web UI's tests: exact npm dependencies, unit tests (vitest), typecheck and
-# build, then the `interslice` binary (which embeds the fresh web/dist) and the
+# The web UI's tests: exact npm dependencies, typecheck and build, lint and
+# formatting (fails on any ESLint error or unformatted file: `npm run format`
+# fixes the latter), unit tests (vitest), then the `interslice` binary (which embeds the fresh web/dist) and the
 # end-to-end suites in headless Chromium against the real `interslice demo`.
 #
 # The binary is the test profile's (target/debug, optimised dependencies) that
@@ -26,6 +27,8 @@ if [ "${WEB_BUILT:-}" != 1 ]; then
   echo "-- npm ci, typecheck and build"
   scripts/build-web.sh
 fi
+echo "-- lint (ESLint) and formatting (Prettier)"
+(cd web && npm run --silent lint && npm run --silent format:check)
 echo "-- vitest"
 (cd web && npx vitest run)
 

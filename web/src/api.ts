@@ -164,7 +164,7 @@ export class Api {
       let msg = `${r.status} ${r.statusText}`;
       let body: Record<string, unknown> | null = null;
       try {
-        body = await r.json();
+        body = (await r.json()) as Record<string, unknown> | null;
         if (body && typeof body.error === "string") msg = body.error;
       } catch {
         /* not JSON */

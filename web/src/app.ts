@@ -83,7 +83,7 @@ export class App {
     return this.showList();
   }
 
-  private async showLogin(): Promise<void> {
+  private showLogin(): void {
     // The server says whether it needs a password (in /api/me); if it did not, a
     // loopback address needs only a name, as docs/API.md says.
     const host = location.hostname;
@@ -95,13 +95,13 @@ export class App {
       placeholder: "your name",
       autocomplete: "username",
       required: true,
-    }) as HTMLInputElement;
+    });
     const pass = h("input", {
       testid: "user-password",
       type: "password",
       placeholder: authRequired ? "password" : "password (if your account has one)",
       autocomplete: "current-password",
-    }) as HTMLInputElement;
+    });
     const err = h("p", { class: "err", testid: "login-error" });
     const passLabel = h("label", { hidden: !authRequired }, "Password", pass);
     const form = h(
@@ -146,7 +146,7 @@ export class App {
   async showList(): Promise<void> {
     if (location.hash !== "#/cells") history.replaceState(null, "", "#/cells");
     this.renderHeader();
-    const showAll = h("input", { type: "checkbox", id: "show-done" }) as HTMLInputElement;
+    const showAll = h("input", { type: "checkbox", id: "show-done" });
     const list = h("table", { class: "cells", testid: "cell-list" });
     const fill = async () => {
       let cells: Cell[];

@@ -42,7 +42,11 @@ const ROWS: [string, string, "ratio" | "count" | "dist" | "vol"][] = [
 ];
 
 /** Format one metric. */
-export function formatMetric(v: unknown, kind: "ratio" | "count" | "dist" | "vol", unit: string): string {
+export function formatMetric(
+  v: Metrics[string] | undefined,
+  kind: "ratio" | "count" | "dist" | "vol",
+  unit: string,
+): string {
   if (v === null || v === undefined) return "—";
   if (typeof v !== "number") return String(v);
   switch (kind) {
@@ -76,7 +80,7 @@ export class EvalPanel {
       "select",
       { testid: "seg-method", title: "Automated segmentation method" },
       ...["otsu", "rosin", "kmeans", "multi-otsu"].map((m) => h("option", { value: m }, m)),
-    ) as HTMLSelectElement;
+    );
     const smooth = h("input", {
       type: "number",
       min: "0",
@@ -84,10 +88,10 @@ export class EvalPanel {
       value: "1",
       class: "num",
       title: "Gaussian smoothing σ in voxels before thresholding",
-    }) as HTMLInputElement;
-    const largest = h("input", { type: "checkbox", checked: true, id: "seg-largest" }) as HTMLInputElement;
-    const fill = h("input", { type: "checkbox", checked: true, id: "seg-fill" }) as HTMLInputElement;
-    this.segSel = h("select", { testid: "seg-select", onchange: () => this.selectionChanged() }) as HTMLSelectElement;
+    });
+    const largest = h("input", { type: "checkbox", checked: true, id: "seg-largest" });
+    const fill = h("input", { type: "checkbox", checked: true, id: "seg-fill" });
+    this.segSel = h("select", { testid: "seg-select", onchange: () => this.selectionChanged() });
     this.table = h("div", { class: "metrics", testid: "metrics-table" });
     this.ratings = h("div", { class: "ratings small" });
     this.showOverlay = h("input", {
@@ -95,15 +99,11 @@ export class EvalPanel {
       id: "show-overlay",
       testid: "show-overlay",
       onchange: () => this.selectionChanged(),
-    }) as HTMLInputElement;
-    this.comment = h("textarea", { rows: 2, placeholder: "comment", testid: "rating-comment" }) as HTMLTextAreaElement;
+    });
+    this.comment = h("textarea", { rows: 2, placeholder: "comment", testid: "rating-comment" });
     const starBox = h("span", { class: "stars", testid: "rating-stars" });
     for (let s = 1; s <= 5; s++) {
-      const b = h(
-        "button",
-        { class: "star", title: `${s} of 5`, onclick: () => this.setScore(s) },
-        "☆",
-      ) as HTMLButtonElement;
+      const b = h("button", { class: "star", title: `${s} of 5`, onclick: () => this.setScore(s) }, "☆");
       this.stars.push(b);
       starBox.append(b);
     }

@@ -141,7 +141,7 @@ export class Tracer {
       label: () => this.st.label,
       labels: () => this.labels,
       overlayChanged: () => this.paintAll(),
-      toast: host.toast,
+      toast: (msg, error) => host.toast(msg, error),
     });
     this.el = this.buildPage();
     this.root = this.el.root;
