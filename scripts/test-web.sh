@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# The web UI's tests: exact npm dependencies, unit tests (vitest), typecheck and
-# build, then the `interslice` binary (which embeds the fresh web/dist) and the
+# The web UI's tests: exact npm dependencies, typecheck and build, lint and
+# formatting (fails on any ESLint error or unformatted file: `npm run format`
+# fixes the latter), unit tests (vitest), then the `interslice` binary (which
+# embeds the fresh web/dist), the check that the generated API types
+# (web/generated/api-schema.d.ts) match the binary's OpenAPI document, and the
 # end-to-end suites in headless Chromium against the real `interslice demo`.
 #
 # The binary is the test profile's (target/debug, optimised dependencies) that
@@ -26,6 +29,8 @@ if [ "${WEB_BUILT:-}" != 1 ]; then
   echo "-- npm ci, typecheck and build"
   scripts/build-web.sh
 fi
+echo "-- lint (ESLint) and formatting (Prettier)"
+(cd web && npm run --silent lint && npm run --silent format:check)
 echo "-- vitest"
 (cd web && npx vitest run)
 
@@ -36,6 +41,9 @@ if [ "$profile" = release ]; then
 else
   cargo build -p interslice-cli
 fi
+
+echo "-- API types: web/generated/api-schema.d.ts is what the binary's OpenAPI document gives"
+INTERSLICE_BIN="${CARGO_TARGET_DIR:-$root/target}/$profile/interslice" scripts/gen-api-types.sh --check
 
 if [ ! -x /usr/bin/chromium ]; then
   echo "-- installing chromium"

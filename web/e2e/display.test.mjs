@@ -7,7 +7,18 @@ import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
 import path from "node:path";
-import { cli, greysIn, painted, pixelsIn, signIn, startBrowser, startDemo, viewStats, waitTracer, writeNifti } from "./harness.mjs";
+import {
+  cli,
+  greysIn,
+  painted,
+  pixelsIn,
+  signIn,
+  startBrowser,
+  startDemo,
+  viewStats,
+  waitTracer,
+  writeNifti,
+} from "./harness.mjs";
 
 let demo;
 let br;
@@ -44,12 +55,19 @@ function writeSyntheticScans(dir) {
       }
   const spacing = [0.8, 0.8, 2.5];
   writeNifti(path.join(dir, "ct_i16.nii"), { dims: SCAN, spacing, values: hu });
-  writeNifti(path.join(dir, "ct_u16_scaled.nii"), { dims: SCAN, spacing, values: Uint16Array.from(hu, (x) => x + 1024), slope: 1, inter: -1024 });
+  writeNifti(path.join(dir, "ct_u16_scaled.nii"), {
+    dims: SCAN,
+    spacing,
+    values: Uint16Array.from(hu, (x) => x + 1024),
+    slope: 1,
+    inter: -1024,
+  });
   writeNifti(path.join(dir, "mr_f32.nii"), { dims: SCAN, spacing, values: mr });
 }
 
 const summary = () => br.page.evaluate(() => window.__interslice.tracer().summary());
-const client = (axis, u, v) => br.page.evaluate(([a, x, y]) => window.__interslice.tracer().sliceToClient(a, x, y), [axis, u, v]);
+const client = (axis, u, v) =>
+  br.page.evaluate(([a, x, y]) => window.__interslice.tracer().sliceToClient(a, x, y), [axis, u, v]);
 const num = async (testid) => Number(await br.page.getByTestId(testid).inputValue());
 
 before(async () => {
@@ -140,7 +158,11 @@ test("16-bit data: the automatic window and the values are in the raw range", as
 
 test("signed, scaled and float scans: air dark, anatomy in all three views, values in the file's units", async () => {
   const { page } = br;
-  for (const [cell, dtype] of [["ct_i16", "i16"], ["ct_u16_scaled", "f32"], ["mr_f32", "f32"]]) {
+  for (const [cell, dtype] of [
+    ["ct_i16", "i16"],
+    ["ct_u16_scaled", "f32"],
+    ["mr_f32", "f32"],
+  ]) {
     await page.goto(`${demo.url}/#/cells`);
     await page.getByTestId(`open-cell-${cell}`).click();
     await waitTracer(page, cell);
@@ -150,7 +172,10 @@ test("signed, scaled and float scans: air dark, anatomy in all three views, valu
     assert.equal(await page.getByTestId("window-preset").inputValue(), ct ? "ct-lung" : "auto", `${cell}: preset`);
     for (const a of ["x", "y", "z"]) {
       const s = await viewStats(page, a);
-      assert.ok(s.neighbour < 0.5 && s.std > 30, `${cell} view ${a}: anatomy, not noise or stripes: ${JSON.stringify(s)}`);
+      assert.ok(
+        s.neighbour < 0.5 && s.std > 30,
+        `${cell} view ${a}: anatomy, not noise or stripes: ${JSON.stringify(s)}`,
+      );
       if (ct) {
         const air = await greysIn(page, a, -1100, -980);
         const tissue = await greysIn(page, a, 20, 60);
@@ -165,10 +190,16 @@ test("signed, scaled and float scans: air dark, anatomy in all three views, valu
     }
     // The value under the cursor, as the file means it (Hounsfield units for the scaled file).
     const [[u, v, val]] = await pixelsIn(page, "z", ct ? -1100 : 700, ct ? -980 : 800, 1);
-    const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+    const [x, y] = await page.evaluate(
+      ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
+      [u, v],
+    );
     await page.mouse.move(x, y);
     const want = dtype === "f32" ? String(Number(Math.fround(val).toPrecision(6))) : String(val);
-    await page.getByTestId("status-value").filter({ hasText: new RegExp(`^value ${want}$`) }).waitFor();
+    await page
+      .getByTestId("status-value")
+      .filter({ hasText: new RegExp(`^value ${want}$`) })
+      .waitFor();
     if (ct) assert.ok(Number(want) <= -980, `${cell}: air in Hounsfield units (${want})`);
   }
 });

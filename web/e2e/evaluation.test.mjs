@@ -31,7 +31,11 @@ before(async () => {
     async ([cell, label, cs]) => {
       let n = 0;
       for (const c of cs) {
-        const r = await fetch(`/api/cells/${cell}/contours`, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ label, axis: "z", index: c.index, points: c.points }) });
+        const r = await fetch(`/api/cells/${cell}/contours`, {
+          method: "POST",
+          headers: { "Content-Type": "application/json" },
+          body: JSON.stringify({ label, axis: "z", index: c.index, points: c.points }),
+        });
         if (r.ok) n++;
       }
       return n;
@@ -53,10 +57,14 @@ test("run a segmentation, compare it with my ground truth, see FP/FN on the slic
   await page.getByTestId("label-select").selectOption(String(nucleus.id));
   await page.getByTestId("seg-method").selectOption("multi-otsu");
   await page.getByTestId("seg-run").click();
-  await page.waitForFunction(() => {
-    const s = document.querySelector('[data-testid="seg-select"]');
-    return s && s.value !== "";
-  }, null, { timeout: 60_000 });
+  await page.waitForFunction(
+    () => {
+      const s = document.querySelector('[data-testid="seg-select"]');
+      return s && s.value !== "";
+    },
+    null,
+    { timeout: 60_000 },
+  );
   const overlays = [];
   page.on("response", (r) => {
     if (r.url().includes("/overlay/")) overlays.push(r.status());
@@ -67,7 +75,11 @@ test("run a segmentation, compare it with my ground truth, see FP/FN on the slic
   const d = Number(await dice.textContent());
   assert.ok(d >= 0 && d <= 1, `Dice shown: ${d}`);
   for (const k of ["jaccard", "sensitivity", "precision", "hd95", "assd", "volume_gt", "fp", "fn"]) {
-    assert.equal(await page.getByTestId("metrics-table").locator(`td[data-key="${k}"]`).count(), 1, `${k} in the table`);
+    assert.equal(
+      await page.getByTestId("metrics-table").locator(`td[data-key="${k}"]`).count(),
+      1,
+      `${k} in the table`,
+    );
   }
   assert.ok(await page.getByTestId("show-overlay").isChecked(), "the FP/FN overlay is switched on");
   await page.waitForFunction(() => window.__interslice.tracer().summary().overlay, null, { timeout: 30_000 });
@@ -103,7 +115,12 @@ test("a comparison without ground truth, or that the server fails, is explained"
   await none.waitFor();
   assert.match(await none.textContent(), /^evaluation: nothing traced on cell '[^']+' by this user for label 1$/);
   // A failing server: its one-line message is shown, the screen stays usable.
-  const fail = (route) => route.fulfill({ status: 500, contentType: "application/json", body: JSON.stringify({ error: "the database is locked" }) });
+  const fail = (route) =>
+    route.fulfill({
+      status: 500,
+      contentType: "application/json",
+      body: JSON.stringify({ error: "the database is locked" }),
+    });
   await context.route("**/evaluate", fail);
   await page.getByTestId("evaluate").click();
   const msg = page.getByTestId("metrics-table").locator(".err");

@@ -26,7 +26,12 @@ export function cli(...args) {
 
 /** Run the binary with extra environment variables. */
 export function cliWith(env, ...args) {
-  return execFileSync(BIN, args, { encoding: "utf8", env: { ...process.env, ...env }, stdio: ["ignore", "pipe", "pipe"], maxBuffer: 256 << 20 });
+  return execFileSync(BIN, args, {
+    encoding: "utf8",
+    env: { ...process.env, ...env },
+    stdio: ["ignore", "pipe", "pipe"],
+    maxBuffer: 256 << 20,
+  });
 }
 
 async function freePort() {
@@ -188,7 +193,8 @@ export function densify(pts, step = 3) {
  * getCoalescedEvents behave as with a real pen.
  */
 export async function penStroke(cdp, pts) {
-  const ev = (type, [x, y], extra = {}) => cdp.send("Input.dispatchMouseEvent", { type, x, y, pointerType: "pen", ...extra });
+  const ev = (type, [x, y], extra = {}) =>
+    cdp.send("Input.dispatchMouseEvent", { type, x, y, pointerType: "pen", ...extra });
   await ev("mouseMoved", pts[0], { button: "none", buttons: 0 });
   await ev("mousePressed", pts[0], { button: "left", buttons: 1, clickCount: 1, force: 0.4 });
   for (let i = 1; i < pts.length; i++) {
@@ -270,7 +276,11 @@ export function viewStats(page, axis) {
       const o = 4 * (x + W * y);
       return d[o] === d[o + 1] && d[o] === d[o + 2] ? d[o] : -1;
     };
-    let n = 0, sum = 0, sum2 = 0, black = 0, white = 0;
+    let n = 0,
+      sum = 0,
+      sum2 = 0,
+      black = 0,
+      white = 0;
     const greys = [];
     for (let y = 0; y < H; y += sy) {
       for (let x = 0; x < W; x += sx) {
@@ -284,17 +294,27 @@ export function viewStats(page, axis) {
         greys.push(v);
       }
     }
-    let adj = 0, na = 0;
+    let adj = 0,
+      na = 0;
     for (let y = 0; y + sy < H; y += sy) {
       for (let x = 0; x + sx < W; x += sx) {
-        const v = g(x, y), right = g(x + sx, y), down = g(x, y + sy);
+        const v = g(x, y),
+          right = g(x + sx, y),
+          down = g(x, y + sy);
         if (v < 0) continue;
-        if (right >= 0) { adj += Math.abs(v - right); na++; }
-        if (down >= 0) { adj += Math.abs(v - down); na++; }
+        if (right >= 0) {
+          adj += Math.abs(v - right);
+          na++;
+        }
+        if (down >= 0) {
+          adj += Math.abs(v - down);
+          na++;
+        }
       }
     }
     // Random pairs from a fixed linear congruential sequence (repeatable).
-    let seed = 12345, rnd = 0;
+    let seed = 12345,
+      rnd = 0;
     const next = () => (seed = (seed * 1103515245 + 12345) % 2147483648) % greys.length;
     for (let k = 0; k < 20000; k++) rnd += Math.abs(greys[next()] - greys[next()]);
     const mean = sum / n;
@@ -358,16 +378,24 @@ export function pixelsIn(page, axis, lo, hi, max = 40) {
       const r = await fetch(`/api/cells/${t.cell.id}/slices/${a}/${index}`);
       const dtype = r.headers.get("X-Dtype");
       const dv = new DataView(await r.arrayBuffer());
-      const at = (u, v) => (dtype === "i16" ? dv.getInt16(2 * (u + w * v), true) : dtype === "u16" ? dv.getUint16(2 * (u + w * v), true) : dtype === "f32" ? dv.getFloat32(4 * (u + w * v), true) : dv.getUint8(u + w * v));
+      const at = (u, v) =>
+        dtype === "i16"
+          ? dv.getInt16(2 * (u + w * v), true)
+          : dtype === "u16"
+            ? dv.getUint16(2 * (u + w * v), true)
+            : dtype === "f32"
+              ? dv.getFloat32(4 * (u + w * v), true)
+              : dv.getUint8(u + w * v);
       const cross = (u, v) => Math.abs(u + 0.5 - w / 2) < 3 || Math.abs(v + 0.5 - h / 2) < 3;
       const found = [];
       for (let v = 1; v < h - 1; v++) {
         for (let u = 1; u < w - 1; u++) {
           let ok = !cross(u, v);
-          for (let dv2 = -1; ok && dv2 <= 1; dv2++) for (let du = -1; ok && du <= 1; du++) {
-            const x = at(u + du, v + dv2);
-            ok = x >= lo && x <= hi;
-          }
+          for (let dv2 = -1; ok && dv2 <= 1; dv2++)
+            for (let du = -1; ok && du <= 1; du++) {
+              const x = at(u + du, v + dv2);
+              ok = x >= lo && x <= hi;
+            }
           if (ok) found.push([u, v, at(u, v)]);
         }
       }
@@ -381,6 +409,10 @@ export function pixelsIn(page, axis, lo, hi, max = 40) {
 /** The grey levels view `axis` shows for voxels in `[lo, hi]`, with how many there were. */
 export async function greysIn(page, axis, lo, hi) {
   const px = await pixelsIn(page, axis, lo, hi);
-  const greys = await canvasGreys(page, axis, px.map(([u, v]) => [u, v]));
+  const greys = await canvasGreys(
+    page,
+    axis,
+    px.map(([u, v]) => [u, v]),
+  );
   return { n: px.length, min: Math.min(...greys), max: Math.max(...greys) };
 }

@@ -13,7 +13,22 @@ import { execFileSync } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
-import { ROOT, cli, densify, greysIn, painted, penStroke, pixelsIn, shot, signIn, startBrowser, startServe, toClient, viewStats, waitTracer } from "./harness.mjs";
+import {
+  ROOT,
+  cli,
+  densify,
+  greysIn,
+  painted,
+  penStroke,
+  pixelsIn,
+  shot,
+  signIn,
+  startBrowser,
+  startServe,
+  toClient,
+  viewStats,
+  waitTracer,
+} from "./harness.mjs";
 
 const USER = "dana";
 /** The cells: file in the sdist's data/ → cell file in the project, its label volume in ground_truth/. */
@@ -61,10 +76,16 @@ function simplify(pts, tol) {
 /** The folder of test data `name` of scripts/fetch-data.sh (downloaded once into the cache). */
 function fetchData(name) {
   try {
-    const out = execFileSync("bash", [path.join(ROOT, "scripts/fetch-data.sh"), name], { encoding: "utf8", stdio: ["ignore", "pipe", "inherit"] });
+    const out = execFileSync("bash", [path.join(ROOT, "scripts/fetch-data.sh"), name], {
+      encoding: "utf8",
+      stdio: ["ignore", "pipe", "inherit"],
+    });
     return out.trim().split("\n").pop();
   } catch (e) {
-    throw new Error(`the real-data suite needs the ${name} test data; scripts/fetch-data.sh failed (message above): ${e.message.split("\n")[0]}`);
+    throw new Error(
+      `the real-data suite needs the ${name} test data; scripts/fetch-data.sh failed (message above): ${e.message.split("\n")[0]}`,
+      { cause: e },
+    );
   }
 }
 
@@ -107,7 +128,10 @@ test("the lung2 CT opens in the lung window: air black, lung grey, soft tissue w
   assert.ok(cell.min <= -1000 && cell.max >= 1000, `Hounsfield units: ${cell.min}..${cell.max}`);
   assert.equal(await page.getByTestId("window-preset").inputValue(), "ct-lung");
   assert.deepEqual([await num("window-low"), await num("window-high")], [-1350, 150]);
-  const offered = await page.getByTestId("window-preset").locator("option:not([disabled])").evaluateAll((os) => os.map((o) => o.value));
+  const offered = await page
+    .getByTestId("window-preset")
+    .locator("option:not([disabled])")
+    .evaluateAll((os) => os.map((o) => o.value));
   assert.deepEqual(offered, ["auto", "ct-soft-tissue", "ct-lung", "ct-bone", "ct-brain"]);
   for (const a of ["z", "y", "x"]) {
     // The lung window maps -1350..150 HU to 0..255: air (about -1000) 60 or
@@ -136,9 +160,15 @@ test("the lung2 CT opens in the lung window: air black, lung grey, soft tissue w
   await painted(page);
   // The value under the cursor is the raw Hounsfield value.
   const [[u, v, hu]] = await pixelsIn(page, "z", -1100, -980, 1);
-  const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+  const [x, y] = await page.evaluate(
+    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
+    [u, v],
+  );
   await page.mouse.move(x, y);
-  await page.getByTestId("status-value").filter({ hasText: `value ${hu}` }).waitFor();
+  await page
+    .getByTestId("status-value")
+    .filter({ hasText: `value ${hu}` })
+    .waitFor();
   await shot(page, "realdata-lung2-ct");
 });
 
@@ -148,20 +178,35 @@ test("the brain1 MR opens with the percentile window and shows anatomy in all th
   const cell = await page.evaluate(() => window.__interslice.tracer().cell);
   assert.equal(cell.dtype, "i16");
   assert.equal(await page.getByTestId("window-preset").inputValue(), "auto");
-  const offered = await page.getByTestId("window-preset").locator("option:not([disabled])").evaluateAll((os) => os.map((o) => o.value));
+  const offered = await page
+    .getByTestId("window-preset")
+    .locator("option:not([disabled])")
+    .evaluateAll((os) => os.map((o) => o.value));
   assert.deepEqual(offered, ["auto"], "no CT windows for MR");
   const lo = await num("window-low");
   const hi = await num("window-high");
-  assert.ok(lo >= cell.min && hi <= cell.max && hi - lo > (cell.max - cell.min) / 10, `window ${lo}..${hi} in ${cell.min}..${cell.max}`);
+  assert.ok(
+    lo >= cell.min && hi <= cell.max && hi - lo > (cell.max - cell.min) / 10,
+    `window ${lo}..${hi} in ${cell.min}..${cell.max}`,
+  );
   for (const a of ["z", "y", "x"]) {
     const s = await viewStats(page, a);
-    assert.ok(s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5, `view ${a} shows anatomy: ${JSON.stringify(s)}`);
+    assert.ok(
+      s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5,
+      `view ${a} shows anatomy: ${JSON.stringify(s)}`,
+    );
   }
   // Inside the head: the value under the cursor is the raw one.
   const [[u, v, val]] = await pixelsIn(page, "z", Math.ceil(lo + (hi - lo) / 3), hi, 1);
-  const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+  const [x, y] = await page.evaluate(
+    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
+    [u, v],
+  );
   await page.mouse.move(x, y);
-  await page.getByTestId("status-value").filter({ hasText: `value ${val}` }).waitFor();
+  await page
+    .getByTestId("status-value")
+    .filter({ hasText: `value ${val}` })
+    .waitFor();
   await shot(page, "realdata-brain1-mr");
 });
 
@@ -172,7 +217,10 @@ test("a pen tracing of the lung2 lesion on every 2nd slice exports with Dice > 0
   cli("contours", "extract", gt, "--every", "2", "--out", file);
   const contours = JSON.parse(fs.readFileSync(file, "utf8")).contours.filter((c) => c.axis === "z");
   const label = contours[0].label;
-  assert.ok(contours.every((c) => c.label === label), "one lesion label");
+  assert.ok(
+    contours.every((c) => c.label === label),
+    "one lesion label",
+  );
   const bySlice = new Map();
   for (const c of contours) bySlice.set(c.index, [...(bySlice.get(c.index) ?? []), c.points]);
   assert.ok(bySlice.size >= 3, `the lesion spans ${bySlice.size} traced slices`);
@@ -194,7 +242,10 @@ test("a pen tracing of the lung2 lesion on every 2nd slice exports with Dice > 0
   for (const i of [...bySlice.keys()].sort((a, b) => a - b)) {
     await page.getByTestId("slice-index").fill(String(i));
     await page.getByTestId("slice-index").press("Enter");
-    await page.getByTestId("status-slice").filter({ hasText: `slice ${i} /` }).waitFor();
+    await page
+      .getByTestId("status-slice")
+      .filter({ hasText: `slice ${i} /` })
+      .waitFor();
     for (const poly of bySlice.get(i)) {
       const pts = densify(await toClient(page, "z", simplify(poly, 0.75)), 10);
       await penStroke(cdp, pts);
@@ -206,8 +257,14 @@ test("a pen tracing of the lung2 lesion on every 2nd slice exports with Dice > 0
   await page.evaluate(() => window.__interslice.tracer().idle());
   // The other two views through the lesion's centre: a click on a small view moves the other views there.
   const mid = [...bySlice.keys()].sort((a, b) => a - b)[Math.floor(bySlice.size / 2)] + 0.5;
-  for (const [a, u] of [["y", cu], ["x", cv]]) {
-    const [px, py] = await page.evaluate(([aa, uu, vv]) => window.__interslice.tracer().sliceToClient(aa, uu, vv), [a, u, mid]);
+  for (const [a, u] of [
+    ["y", cu],
+    ["x", cv],
+  ]) {
+    const [px, py] = await page.evaluate(
+      ([aa, uu, vv]) => window.__interslice.tracer().sliceToClient(aa, uu, vv),
+      [a, u, mid],
+    );
     await page.mouse.click(px, py);
   }
   await page.evaluate(() => window.__interslice.tracer().idle());
@@ -216,7 +273,9 @@ test("a pen tracing of the lung2 lesion on every 2nd slice exports with Dice > 0
   const out = path.join(srv.scratch, "lesion.nrrd");
   cli("export", srv.dir, "--cell", "lung2", "--user", USER, "--label", String(label), "--out", out);
   const m = JSON.parse(cli("evaluate", gt, out, "--label", String(label), "--json"));
-  console.log(`lung2 lesion: ${bySlice.size} slices traced with the pen, Dice ${m.dice.toFixed(4)} of the export against the label`);
+  console.log(
+    `lung2 lesion: ${bySlice.size} slices traced with the pen, Dice ${m.dice.toFixed(4)} of the export against the label`,
+  );
   assert.ok(m.dice > 0.85, `Dice ${m.dice}`);
   const errors = br.errors.filter((e) => !/Failed to load resource/.test(e));
   assert.deepEqual(errors, [], "no errors in the page");

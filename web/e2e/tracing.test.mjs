@@ -10,7 +10,18 @@ import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
 import path from "node:path";
-import { cli, densify, penStroke, shot, signIn, startBrowser, startDemo, stats, toClient, waitTracer } from "./harness.mjs";
+import {
+  cli,
+  densify,
+  penStroke,
+  shot,
+  signIn,
+  startBrowser,
+  startDemo,
+  stats,
+  toClient,
+  waitTracer,
+} from "./harness.mjs";
 
 const USER = "alice";
 const CELL = "cell_001";
@@ -62,7 +73,10 @@ async function goto(i) {
     await page.getByTestId("slice-index").fill(String(i));
     await page.getByTestId("slice-index").press("Enter");
   }
-  await page.getByTestId("status-slice").filter({ hasText: `slice ${i} /` }).waitFor();
+  await page
+    .getByTestId("status-slice")
+    .filter({ hasText: `slice ${i} /` })
+    .waitFor();
 }
 
 /** Trace the outline (slice coordinates) with the pen, closing it on the start point; returns the samples sent. */
@@ -131,7 +145,12 @@ test("trace the nucleus with the pen on every 5th slice", async () => {
     if (n === 0) {
       // A bad attempt, lifted before Add contour: putting the pen down again restarts it.
       const c = await toClient(page, "z", polys[0]);
-      await penStroke(br.cdp, densify(c).slice(0, 40).map(([x, y]) => [x + 15, y + 15]));
+      await penStroke(
+        br.cdp,
+        densify(c)
+          .slice(0, 40)
+          .map(([x, y]) => [x + 15, y + 15]),
+      );
       assert.equal((await summary()).onSlice, 0, "an open stroke is not a contour");
       await trace(polys[0]);
     } else if (n === 1) {
@@ -147,8 +166,15 @@ test("trace the nucleus with the pen on every 5th slice", async () => {
       // Every pen sample arrives (coalesced events included) with its pressure;
       // only the final one, back on the start point, closes the polygon.
       await idle();
-      const stored = await page.evaluate(([c, l, k]) => fetch(`/api/cells/${c}/contours?axis=z&index=${k}&label=${l}`).then((r) => r.json()), [CELL, nucleus.id, i]);
-      assert.deepEqual(stored.map((c) => c.points.length), sent.map((n) => n - 1), `slice ${i}: all pen samples stored`);
+      const stored = await page.evaluate(
+        ([c, l, k]) => fetch(`/api/cells/${c}/contours?axis=z&index=${k}&label=${l}`).then((r) => r.json()),
+        [CELL, nucleus.id, i],
+      );
+      assert.deepEqual(
+        stored.map((c) => c.points.length),
+        sent.map((n) => n - 1),
+        `slice ${i}: all pen samples stored`,
+      );
       for (const c of stored) {
         assert.equal(c.tool, "pen");
         assert.equal(c.pressure.length, c.points.length);
@@ -162,7 +188,11 @@ test("trace the nucleus with the pen on every 5th slice", async () => {
       await page.getByTestId("clear-contours").click();
       await idle();
       assert.equal((await summary()).onSlice, 0, "cleared");
-      for (const [btn, want] of [["undo", 1], ["redo", 0], ["undo", 1]]) {
+      for (const [btn, want] of [
+        ["undo", 1],
+        ["redo", 0],
+        ["undo", 1],
+      ]) {
         await page.getByTestId(btn).click();
         await page.waitForFunction((w) => window.__interslice.tracer().summary().onSlice === w, want);
       }
@@ -189,9 +219,11 @@ test("interpolate with the chosen method and preview the skipped slices", async 
   const idx = [...sparse.keys()].sort((a, b) => a - b);
   const mid = idx[Math.floor(idx.length / 2)];
   // Slice switches to slices not fetched yet (the neighbours at the skip step are prefetched).
-  const seen = (await br.page.evaluate(() => window.__interslice.tracer().figures.sliceSwitch.length));
+  const seen = await br.page.evaluate(() => window.__interslice.tracer().figures.sliceSwitch.length);
   for (const i of [3, 121, 17, 96, 41, 77, 9, 110, 58, 30]) await goto(i);
-  out.slice_switch_uncached_ms = stats((await br.page.evaluate(() => window.__interslice.tracer().figures.sliceSwitch)).slice(seen));
+  out.slice_switch_uncached_ms = stats(
+    (await br.page.evaluate(() => window.__interslice.tracer().figures.sliceSwitch)).slice(seen),
+  );
   await goto(mid + 2);
   await page.getByTestId("status-kind").filter({ hasText: "interpolated" }).waitFor();
   await shot(page, "tracing");
@@ -230,7 +262,8 @@ test("a stroke drawn while the server is unreachable is kept and sent later, acr
   const { page, context } = br;
   const extra = [...dense.keys()].find((i) => !sparse.has(i) && i > Math.min(...sparse.keys()));
   await goto(extra);
-  const block = (route) => (route.request().method() === "GET" ? route.continue() : route.abort("internetdisconnected"));
+  const block = (route) =>
+    route.request().method() === "GET" ? route.continue() : route.abort("internetdisconnected");
   await context.route("**/api/cells/*/contours", block);
   await trace(dense.get(extra)[0]);
   await page.getByText(/not saved yet/).waitFor();
@@ -241,7 +274,10 @@ test("a stroke drawn while the server is unreachable is kept and sent later, acr
   assert.equal((await summary()).onSlice, 1, "and shown");
   await context.unroute("**/api/cells/*/contours", block);
   await page.waitForFunction(() => window.__interslice.tracer().summary().pending === 0, null, { timeout: 30_000 });
-  const stored = await page.evaluate((i) => fetch(`/api/cells/cell_001/contours?axis=z&index=${i}`).then((r) => r.json()), extra);
+  const stored = await page.evaluate(
+    (i) => fetch(`/api/cells/cell_001/contours?axis=z&index=${i}`).then((r) => r.json()),
+    extra,
+  );
   assert.equal(stored.length, 1, "stored once");
   expectDrawn = [...expectDrawn, extra].sort((a, b) => a - b);
 });
@@ -255,7 +291,10 @@ test("the exported volume matches the phantom's nucleus (Dice > 0.85)", async ()
   await page.locator("a.exp", { hasText: /^nii\.gz$/ }).click();
   const viaUi = path.join(demo.scratch, "export-ui.nii.gz");
   await (await dl).saveAs(viaUi);
-  for (const [how, file] of [["cli", viaCli], ["ui", viaUi]]) {
+  for (const [how, file] of [
+    ["cli", viaCli],
+    ["ui", viaUi],
+  ]) {
     const m = JSON.parse(cli("evaluate", gt, file, "--label", "2", "--json"));
     out[`dice_${how}`] = m.dice;
     assert.ok(m.dice > 0.85, `${how} export: Dice ${m.dice}`);
@@ -270,7 +309,10 @@ test("finished cells leave the queue; Next cell opens the next one", async () =>
   await waitTracer(page, "cell_002");
   await page.goto(`${demo.url}/#/cells`);
   await page.getByTestId("cell-list").locator("tbody tr").first().waitFor();
-  const ids = await page.getByTestId("cell-list").locator("tbody tr").evaluateAll((rs) => rs.map((r) => r.getAttribute("data-cell")));
+  const ids = await page
+    .getByTestId("cell-list")
+    .locator("tbody tr")
+    .evaluateAll((rs) => rs.map((r) => r.getAttribute("data-cell")));
   assert.deepEqual(ids, ["cell_002", "cell_003"]);
   await page.locator("#show-done").check();
   await page.locator('[data-cell="cell_001"] .badge.done').waitFor();

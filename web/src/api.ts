@@ -1,6 +1,7 @@
 /**
  * Typed client of the interslice HTTP API (docs/API.md).
  */
+import type { components } from "../generated/api-schema";
 import type { Axis, Vec2 } from "./transform";
 import { parseDtype, type Dtype } from "./windowing";
 
@@ -16,105 +17,97 @@ export class ApiError extends Error {
   }
 }
 
-/** The signed-in user. */
-export interface Me {
-  /** User name. */
-  name: string;
-  /** `tracer`, `reviewer` or `admin`. */
-  role: string;
+/**
+ * The request and answer schemas of the server's OpenAPI document, generated
+ * by `scripts/gen-api-types.sh` (openapi-typescript) and checked against the
+ * binary by `scripts/test-web.sh`, so they cannot drift from the server.
+ * Where the document types a field more loosely than the server sends it (a
+ * string that is one of a few values, an array that always has three numbers)
+ * the types below narrow it and say so. Answers the document has no schema for
+ * yet are typed by hand, each marked "no schema".
+ */
+type Schemas = components["schemas"];
+
+/** The roles the server has (`Me.role` is a string in the document). */
+export type Role = "tracer" | "reviewer";
+
+/** The signed-in user (schema `Me`); the answer of sign-in has no `auth_required`. */
+export type Me = Omit<Schemas["Me"], "role" | "auth_required"> & {
+  role: Role;
   /** Whether a password is required to sign in. */
   auth_required?: boolean;
-}
+};
 
-/** A cell of the queue. */
-export interface Cell {
-  id: string;
-  name: string;
+/** A cell's status for the signed-in user; "unreadable" when its file cannot be read. */
+export type CellStatus = "not_started" | "in_progress" | "done" | "unreadable";
+
+/**
+ * A cell of the queue (schema `CellSummary`), narrowed: `dims` and `spacing`
+ * have three numbers, `dtype` is a voxel type the slices come in, `status` a
+ * `CellStatus`.
+ */
+export type Cell = Omit<Schemas["CellSummary"], "dims" | "spacing" | "dtype" | "status"> & {
   dims: [number, number, number];
   spacing: [number, number, number];
-  unit: string;
-  /** Voxel type of the volume (also the slices'). */
   dtype: Dtype;
-  status: "not_started" | "in_progress" | "done" | "unreadable";
-  /** Seconds this user spent tracing it. */
-  seconds: number;
-  /** Why the file cannot be read (status "unreadable"); such a cell cannot be opened. */
-  error?: string;
-}
+  status: CellStatus;
+};
 
-/** A label (component). */
+/** A label (component). No schema. */
 export interface Label {
   id: number;
   name: string;
   color: string;
 }
 
-/** A cell with its range and labels. */
-export interface CellDetail extends Cell {
+/** A cell with its range and labels (`GET /api/cells/{cell}`). No schema. */
+export type CellDetail = Cell & {
   min: number;
   max: number;
   labels: Label[];
-}
+  /** Physical origin of voxel (0, 0, 0). */
+  origin: [number, number, number];
+};
 
-/** A stored contour. */
-export interface Contour {
+/** A contour to store (schema `AddContour`, with `axis` an `Axis` and points `[u, v]` pairs). */
+export type NewContour = Omit<Schemas["AddContour"], "axis" | "points"> & { axis: Axis; points: Vec2[] };
+
+/**
+ * A stored contour. No schema. Its id is the server's number, or the client id
+ * (a string) while it waits in the outbox.
+ */
+export type Contour = Omit<NewContour, "client_id"> & {
   id: number | string;
-  label: number;
-  axis: Axis;
-  index: number;
-  points: Vec2[];
-  pressure?: number[];
-  times_ms?: number[];
-  tool?: string;
   author?: string;
   created?: string;
   updated?: string;
-}
+};
 
-/** A contour to store. */
-export interface NewContour {
-  label: number;
-  axis: Axis;
-  index: number;
-  points: Vec2[];
-  pressure?: number[];
-  times_ms?: number[];
-  tool?: string;
-  client_id?: string;
-}
-
-/** A drawn slice. */
+/** A drawn slice. No schema. */
 export interface Drawn {
   index: number;
   empty: boolean;
 }
 
-/** An interpolation method. */
-export interface Method {
-  name: string;
-  description: string;
-}
+/** An interpolation method (schema `MethodInfo`). */
+export type Method = Schemas["MethodInfo"];
 
-/** The answer of an interpolation. */
-export interface InterpResult {
-  result_id: string;
-  method: string;
-  label: number;
+/** One slice of a preview (schema `PreviewSlice`, contours as `[u, v]` pairs). */
+export type PreviewSlice = Omit<Schemas["PreviewSlice"], "contours"> & { contours: Vec2[][] };
+
+/** The answer of an interpolation (schema `InterpolateAnswer`, with `axis` an `Axis`). */
+export type InterpResult = Omit<Schemas["InterpolateAnswer"], "axis" | "slices"> & {
   axis: Axis;
-  slices: { index: number; drawn: boolean; contours: Vec2[][] }[];
-  /** Physical volume of the interpolated mask. */
-  volume: number;
-  /** Its unit, already cubed ("µm³"). */
-  unit: string;
-}
+  slices: PreviewSlice[];
+};
 
-/** A triangle mesh in physical units. */
+/** A triangle mesh in physical units. No schema. */
 export interface Mesh {
   vertices: number[];
   indices: number[];
 }
 
-/** A raw slice. */
+/** A raw slice (binary answer; its size and type come in headers). */
 export interface RawSlice {
   width: number;
   height: number;
@@ -122,25 +115,16 @@ export interface RawSlice {
   data: ArrayBuffer;
 }
 
-/** An automated segmentation of a cell. */
-export interface Segmentation {
-  id: string | number;
-  name: string;
-  method: string;
-  params?: unknown;
-  created?: string;
-}
+/** An automated segmentation of a cell (schema `SegmentationInfo`). */
+export type Segmentation = Schemas["SegmentationInfo"];
 
-/** A rating of a segmentation. */
-export interface Rating {
-  segmentation: string | number;
-  score: number;
-  comment: string;
-  user?: string;
-  created?: string;
-}
+/** A rating to store (schema `RatingBody`). */
+export type NewRating = Schemas["RatingBody"];
 
-/** Metrics as printed by `interslice evaluate --json`. */
+/** A stored rating. No schema. */
+export type Rating = Required<NewRating> & { id?: number; user?: string; created?: string };
+
+/** Metrics as printed by `interslice evaluate --json`. No schema. */
 export type Metrics = Record<string, number | null | string>;
 
 const enc = encodeURIComponent;
@@ -152,8 +136,9 @@ export class Api {
     private fetchImpl: typeof fetch = (...a) => fetch(...a),
   ) {}
 
-  private async req(method: string, path: string, body?: unknown): Promise<Response> {
+  private async req(method: string, path: string, body?: unknown, keepalive = false): Promise<Response> {
     const init: RequestInit = { method, credentials: "same-origin", headers: {} };
+    if (keepalive) init.keepalive = true;
     if (body !== undefined) {
       init.body = JSON.stringify(body);
       (init.headers as Record<string, string>)["Content-Type"] = "application/json";
@@ -163,7 +148,7 @@ export class Api {
       let msg = `${r.status} ${r.statusText}`;
       let body: Record<string, unknown> | null = null;
       try {
-        body = await r.json();
+        body = (await r.json()) as Record<string, unknown> | null;
         if (body && typeof body.error === "string") msg = body.error;
       } catch {
         /* not JSON */
@@ -173,8 +158,8 @@ export class Api {
     return r;
   }
 
-  private async json<T>(method: string, path: string, body?: unknown): Promise<T> {
-    const r = await this.req(method, path, body);
+  private async json<T>(method: string, path: string, body?: unknown, keepalive = false): Promise<T> {
+    const r = await this.req(method, path, body, keepalive);
     if (r.status === 204) return undefined as T;
     const text = await r.text();
     if (!text) return undefined as T;
@@ -188,7 +173,8 @@ export class Api {
 
   /** POST /api/login */
   login(name: string, password?: string): Promise<Me> {
-    return this.json("POST", "/api/login", password ? { name, password } : { name });
+    const body: Schemas["LoginBody"] = password ? { name, password } : { name };
+    return this.json("POST", "/api/login", body);
   }
   /** POST /api/logout */
   logout(): Promise<void> {
@@ -225,7 +211,7 @@ export class Api {
     return this.json("GET", `/api/cells/${enc(id)}`);
   }
   /** PUT /api/cells/{cell}/status */
-  setStatus(id: string, status: Cell["status"]): Promise<unknown> {
+  setStatus(id: string, status: CellStatus): Promise<unknown> {
     return this.json("PUT", `/api/cells/${enc(id)}/status`, { status });
   }
   /** GET /api/cells/{cell}/histogram */
@@ -241,9 +227,12 @@ export class Api {
     const dtype = parseDtype(r.headers.get("X-Dtype"));
     return { width, height, dtype, data };
   }
-  /** POST /api/cells/{cell}/time */
-  addTime(id: string, seconds: number): Promise<{ total_seconds: number }> {
-    return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds });
+  /**
+   * POST /api/cells/{cell}/time. `keepalive`: the request outlives the page
+   * (when the screen or the tab is closed).
+   */
+  addTime(id: string, seconds: number, keepalive = false): Promise<{ total_seconds: number }> {
+    return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds }, keepalive);
   }
   /** GET /api/labels */
   labels(): Promise<Label[]> {
@@ -251,7 +240,8 @@ export class Api {
   }
   /** POST /api/labels */
   addLabel(name: string, color?: string): Promise<Label> {
-    return this.json("POST", "/api/labels", color ? { name, color } : { name });
+    const body: Schemas["NewLabel"] = color ? { name, color } : { name };
+    return this.json("POST", "/api/labels", body);
   }
   /** GET the user's contours of a cell. */
   contours(id: string, q: { axis?: Axis; index?: number; label?: number } = {}): Promise<Contour[]> {
@@ -265,7 +255,13 @@ export class Api {
     return this.json("POST", `/api/cells/${enc(id)}/contours`, c);
   }
   /** PUT: replace a label's contours on one slice (empty list clears). */
-  replaceContours(id: string, axis: Axis, index: number, label: number, contours: Omit<NewContour, "label" | "axis" | "index">[]): Promise<unknown> {
+  replaceContours(
+    id: string,
+    axis: Axis,
+    index: number,
+    label: number,
+    contours: Omit<NewContour, "label" | "axis" | "index">[],
+  ): Promise<unknown> {
     return this.json("PUT", `/api/cells/${enc(id)}/slices/${axis}/${index}/contours`, { label, contours });
   }
   /** POST: a drawn slice without the structure. */
@@ -290,10 +286,11 @@ export class Api {
   }
   /** POST interpolate. */
   interpolate(id: string, label: number, axis: Axis, method?: string): Promise<InterpResult> {
-    return this.json("POST", `/api/cells/${enc(id)}/interpolate`, method ? { label, axis, method } : { label, axis });
+    const body: Schemas["InterpolateBody"] = method ? { label, axis, method } : { label, axis };
+    return this.json("POST", `/api/cells/${enc(id)}/interpolate`, body);
   }
   /** GET the mesh of an interpolation result. */
-  mesh(id: string, resultId: string): Promise<Mesh> {
+  mesh(id: string, resultId: number): Promise<Mesh> {
     return this.json("GET", `/api/cells/${enc(id)}/results/${enc(resultId)}/mesh`);
   }
   /** The URL of an export download. */
@@ -305,16 +302,25 @@ export class Api {
     return this.json("GET", `/api/cells/${enc(id)}/segmentations`);
   }
   /** POST: compute an automated segmentation. */
-  segment(id: string, body: { method: string; classes?: number; smooth?: number; largest_component?: boolean; fill_holes?: boolean }): Promise<Segmentation> {
+  segment(id: string, body: Schemas["SegmentBody"]): Promise<Segmentation> {
     return this.json("POST", `/api/cells/${enc(id)}/segmentations`, body);
   }
   /** POST evaluate. */
-  evaluate(id: string, body: { label: number; reference: Record<string, unknown>; test: Record<string, unknown> }): Promise<Metrics> {
+  evaluate(id: string, body: Schemas["EvaluateBody"]): Promise<Metrics> {
     return this.json("POST", `/api/cells/${enc(id)}/evaluate`, body);
   }
   /** GET the TN/TP/FP/FN overlay of a slice (u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN). */
-  async overlay(id: string, axis: Axis, index: number, label: number, segmentation: string | number): Promise<Uint8Array> {
-    const r = await this.req("GET", `/api/cells/${enc(id)}/overlay/${axis}/${index}?label=${label}&segmentation=${enc(String(segmentation))}`);
+  async overlay(
+    id: string,
+    axis: Axis,
+    index: number,
+    label: number,
+    segmentation: string | number,
+  ): Promise<Uint8Array> {
+    const r = await this.req(
+      "GET",
+      `/api/cells/${enc(id)}/overlay/${axis}/${index}?label=${label}&segmentation=${enc(String(segmentation))}`,
+    );
     return new Uint8Array(await r.arrayBuffer());
   }
   /** GET ratings. */
@@ -322,7 +328,7 @@ export class Api {
     return this.json("GET", `/api/cells/${enc(id)}/ratings`);
   }
   /** POST a rating. */
-  rate(id: string, r: Rating): Promise<Rating> {
+  rate(id: string, r: NewRating): Promise<Rating> {
     return this.json("POST", `/api/cells/${enc(id)}/ratings`, r);
   }
 }

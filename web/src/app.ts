@@ -8,7 +8,12 @@ import { h, hms } from "./dom";
 import { Outbox } from "./queue";
 import { Tracer } from "./tracer";
 
-const STATUS_TEXT: Record<Cell["status"], string> = { not_started: "not started", in_progress: "in progress", done: "done", unreadable: "cannot be read" };
+const STATUS_TEXT: Record<Cell["status"], string> = {
+  not_started: "not started",
+  in_progress: "in progress",
+  done: "done",
+  unreadable: "cannot be read",
+};
 
 /** The app. */
 export class App {
@@ -78,38 +83,54 @@ export class App {
     return this.showList();
   }
 
-  private async showLogin(): Promise<void> {
+  private showLogin(): void {
     // The server says whether it needs a password (in /api/me); if it did not, a
     // loopback address needs only a name, as docs/API.md says.
     const host = location.hostname;
     const loopback = host === "127.0.0.1" || host === "localhost" || host === "::1" || host === "[::1]";
     const authRequired = this.api.authRequired ?? !loopback;
-    const name = h("input", { testid: "user-name", type: "text", placeholder: "your name", autocomplete: "username", required: true }) as HTMLInputElement;
-    const pass = h("input", { testid: "user-password", type: "password", placeholder: authRequired ? "password" : "password (if your account has one)", autocomplete: "current-password" }) as HTMLInputElement;
+    const name = h("input", {
+      testid: "user-name",
+      type: "text",
+      placeholder: "your name",
+      autocomplete: "username",
+      required: true,
+    });
+    const pass = h("input", {
+      testid: "user-password",
+      type: "password",
+      placeholder: authRequired ? "password" : "password (if your account has one)",
+      autocomplete: "current-password",
+    });
     const err = h("p", { class: "err", testid: "login-error" });
     const passLabel = h("label", { hidden: !authRequired }, "Password", pass);
     const form = h(
       "form",
-      { class: "login", testid: "login-form", onsubmit: async (e: Event) => {
-        e.preventDefault();
-        err.textContent = "";
-        try {
-          this.me = await this.api.login(name.value.trim(), pass.value || undefined);
-          void this.outbox.flush();
-          if (!location.hash.startsWith("#/cell/")) location.hash = "#/cells";
-          await this.route();
-        } catch (ex) {
-          if (ex instanceof ApiError && ex.status === 401 && !pass.value) {
-            // The server wants a password it had not announced: ask for it.
-            passLabel.hidden = false;
-            pass.placeholder = "password";
-            err.textContent = ex.message;
-            pass.focus();
-          } else {
-            err.textContent = ex instanceof ApiError && ex.status === 401 ? "wrong name or password" : (ex as Error).message;
+      {
+        class: "login",
+        testid: "login-form",
+        onsubmit: async (e: Event) => {
+          e.preventDefault();
+          err.textContent = "";
+          try {
+            this.me = await this.api.login(name.value.trim(), pass.value || undefined);
+            void this.outbox.flush();
+            if (!location.hash.startsWith("#/cell/")) location.hash = "#/cells";
+            await this.route();
+          } catch (ex) {
+            if (ex instanceof ApiError && ex.status === 401 && !pass.value) {
+              // The server wants a password it had not announced: ask for it.
+              passLabel.hidden = false;
+              pass.placeholder = "password";
+              err.textContent = ex.message;
+              pass.focus();
+            } else {
+              err.textContent =
+                ex instanceof ApiError && ex.status === 401 ? "wrong name or password" : (ex as Error).message;
+            }
           }
-        }
-      } },
+        },
+      },
       h("h1", {}, "interslice"),
       h("p", { class: "muted" }, "Trace a few slices, interpolate the rest, measure."),
       h("label", {}, "Name", name),
@@ -125,7 +146,7 @@ export class App {
   async showList(): Promise<void> {
     if (location.hash !== "#/cells") history.replaceState(null, "", "#/cells");
     this.renderHeader();
-    const showAll = h("input", { type: "checkbox", id: "show-done" }) as HTMLInputElement;
+    const showAll = h("input", { type: "checkbox", id: "show-done" });
     const list = h("table", { class: "cells", testid: "cell-list" });
     const fill = async () => {
       let cells: Cell[];
@@ -136,28 +157,79 @@ export class App {
         return;
       }
       list.replaceChildren(
-        h("thead", {}, h("tr", {}, h("th", {}, "Cell"), h("th", {}, "Size (voxels)"), h("th", {}, "Voxel"), h("th", {}, "Type"), h("th", {}, "Your status"), h("th", {}, "Time spent"), h("th", {}))),
-        h("tbody", {}, ...cells.map((c) => c.error !== undefined
-          ? h("tr", { "data-cell": c.id, class: "st-unreadable" },
-            h("td", {}, c.name || c.id),
-            h("td", { colspan: 3, class: "err", testid: `cell-error-${c.id}` }, c.error),
-            h("td", {}, h("span", { class: "badge unreadable" }, STATUS_TEXT.unreadable)),
-            h("td", {}), h("td", {}))
-          : h("tr", { "data-cell": c.id, class: `st-${c.status}` },
-            h("td", {}, h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, testid: `open-cell-${c.id}` }, c.name || c.id)),
-            h("td", {}, c.dims.join(" × ")),
-            h("td", {}, `${c.spacing.map((s) => +s.toPrecision(3)).join(" × ")} ${c.unit}`),
-            h("td", {}, c.dtype),
-            h("td", {}, h("span", { class: `badge ${c.status}` }, STATUS_TEXT[c.status] ?? c.status)),
-            h("td", { class: "num" }, c.seconds > 0 ? hms(c.seconds) : "—"),
-            h("td", {}, h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, class: "button" }, c.status === "not_started" ? "Start" : "Open")),
-          ))),
+        h(
+          "thead",
+          {},
+          h(
+            "tr",
+            {},
+            h("th", {}, "Cell"),
+            h("th", {}, "Size (voxels)"),
+            h("th", {}, "Voxel"),
+            h("th", {}, "Type"),
+            h("th", {}, "Your status"),
+            h("th", {}, "Time spent"),
+            h("th", {}),
+          ),
+        ),
+        h(
+          "tbody",
+          {},
+          ...cells.map((c) =>
+            c.error !== undefined
+              ? h(
+                  "tr",
+                  { "data-cell": c.id, class: "st-unreadable" },
+                  h("td", {}, c.name || c.id),
+                  h("td", { colspan: 3, class: "err", testid: `cell-error-${c.id}` }, c.error),
+                  h("td", {}, h("span", { class: "badge unreadable" }, STATUS_TEXT.unreadable)),
+                  h("td", {}),
+                  h("td", {}),
+                )
+              : h(
+                  "tr",
+                  { "data-cell": c.id, class: `st-${c.status}` },
+                  h(
+                    "td",
+                    {},
+                    h("a", { href: `#/cell/${encodeURIComponent(c.id)}`, testid: `open-cell-${c.id}` }, c.name || c.id),
+                  ),
+                  h("td", {}, c.dims.join(" × ")),
+                  h("td", {}, `${c.spacing.map((s) => +s.toPrecision(3)).join(" × ")} ${c.unit}`),
+                  h("td", {}, c.dtype),
+                  h("td", {}, h("span", { class: `badge ${c.status}` }, STATUS_TEXT[c.status] ?? c.status)),
+                  h("td", { class: "num" }, c.seconds > 0 ? hms(c.seconds) : "—"),
+                  h(
+                    "td",
+                    {},
+                    h(
+                      "a",
+                      { href: `#/cell/${encodeURIComponent(c.id)}`, class: "button" },
+                      c.status === "not_started" ? "Start" : "Open",
+                    ),
+                  ),
+                ),
+          ),
+        ),
       );
-      if (cells.length === 0) list.append(h("tr", {}, h("td", { colspan: 7, class: "muted" }, showAll.checked ? "No cells." : "All your cells are finished. Tick “show finished” to see them.")));
+      if (cells.length === 0)
+        list.append(
+          h(
+            "tr",
+            {},
+            h(
+              "td",
+              { colspan: 7, class: "muted" },
+              showAll.checked ? "No cells." : "All your cells are finished. Tick “show finished” to see them.",
+            ),
+          ),
+        );
     };
     showAll.addEventListener("change", () => void fill());
     this.body.replaceChildren(
-      h("section", { class: "list" },
+      h(
+        "section",
+        { class: "list" },
         h("h2", {}, "Your cells"),
         h("p", { class: "row small" }, showAll, h("label", { for: "show-done" }, "show finished cells")),
         list,
@@ -217,7 +289,10 @@ export class App {
     this.toastEl.className = error ? "toast error" : "toast";
     this.toastEl.hidden = false;
     clearTimeout((this.toastEl as unknown as { _t?: number })._t);
-    (this.toastEl as unknown as { _t?: number })._t = window.setTimeout(() => (this.toastEl.hidden = true), error ? 6000 : 2500);
+    (this.toastEl as unknown as { _t?: number })._t = window.setTimeout(
+      () => (this.toastEl.hidden = true),
+      error ? 6000 : 2500,
+    );
   }
 
   /** The tracing screen, when open (test hook). */
@@ -225,4 +300,3 @@ export class App {
     return this.tracer;
   }
 }
-

@@ -42,7 +42,11 @@ const ROWS: [string, string, "ratio" | "count" | "dist" | "vol"][] = [
 ];
 
 /** Format one metric. */
-export function formatMetric(v: unknown, kind: "ratio" | "count" | "dist" | "vol", unit: string): string {
+export function formatMetric(
+  v: Metrics[string] | undefined,
+  kind: "ratio" | "count" | "dist" | "vol",
+  unit: string,
+): string {
   if (v === null || v === undefined) return "—";
   if (typeof v !== "number") return String(v);
   switch (kind) {
@@ -72,36 +76,90 @@ export class EvalPanel {
   private comment: HTMLTextAreaElement;
 
   constructor(private ctx: EvalContext) {
-    const method = h("select", { testid: "seg-method", title: "Automated segmentation method" },
-      ...["otsu", "rosin", "kmeans", "multi-otsu"].map((m) => h("option", { value: m }, m))) as HTMLSelectElement;
-    const smooth = h("input", { type: "number", min: "0", step: "0.5", value: "1", class: "num", title: "Gaussian smoothing σ in voxels before thresholding" }) as HTMLInputElement;
-    const largest = h("input", { type: "checkbox", checked: true, id: "seg-largest" }) as HTMLInputElement;
-    const fill = h("input", { type: "checkbox", checked: true, id: "seg-fill" }) as HTMLInputElement;
-    this.segSel = h("select", { testid: "seg-select", onchange: () => this.selectionChanged() }) as HTMLSelectElement;
+    const method = h(
+      "select",
+      { testid: "seg-method", title: "Automated segmentation method" },
+      ...["otsu", "rosin", "kmeans", "multi-otsu"].map((m) => h("option", { value: m }, m)),
+    );
+    const smooth = h("input", {
+      type: "number",
+      min: "0",
+      step: "0.5",
+      value: "1",
+      class: "num",
+      title: "Gaussian smoothing σ in voxels before thresholding",
+    });
+    const largest = h("input", { type: "checkbox", checked: true, id: "seg-largest" });
+    const fill = h("input", { type: "checkbox", checked: true, id: "seg-fill" });
+    this.segSel = h("select", { testid: "seg-select", onchange: () => this.selectionChanged() });
     this.table = h("div", { class: "metrics", testid: "metrics-table" });
     this.ratings = h("div", { class: "ratings small" });
-    this.showOverlay = h("input", { type: "checkbox", id: "show-overlay", testid: "show-overlay", onchange: () => this.selectionChanged() }) as HTMLInputElement;
-    this.comment = h("textarea", { rows: 2, placeholder: "comment", testid: "rating-comment" }) as HTMLTextAreaElement;
+    this.showOverlay = h("input", {
+      type: "checkbox",
+      id: "show-overlay",
+      testid: "show-overlay",
+      onchange: () => this.selectionChanged(),
+    });
+    this.comment = h("textarea", { rows: 2, placeholder: "comment", testid: "rating-comment" });
     const starBox = h("span", { class: "stars", testid: "rating-stars" });
     for (let s = 1; s <= 5; s++) {
-      const b = h("button", { class: "star", title: `${s} of 5`, onclick: () => this.setScore(s) }, "☆") as HTMLButtonElement;
+      const b = h("button", { class: "star", title: `${s} of 5`, onclick: () => this.setScore(s) }, "☆");
       this.stars.push(b);
       starBox.append(b);
     }
-    this.root = h("section", { class: "eval", testid: "eval-panel" },
+    this.root = h(
+      "section",
+      { class: "eval", testid: "eval-panel" },
       h("h3", {}, "Evaluate a segmentation"),
       h("div", { class: "row" }, method, h("label", { title: "smoothing σ" }, "σ"), smooth),
-      h("div", { class: "row small" }, largest, h("label", { for: "seg-largest" }, "largest component"), fill, h("label", { for: "seg-fill" }, "fill holes")),
-      h("div", { class: "row" }, h("button", { testid: "seg-run", onclick: () => void this.run(method.value, Number(smooth.value), largest.checked, fill.checked) }, "Run segmentation")),
-      h("div", { class: "row" }, this.segSel),
-      h("div", { class: "row" },
-        h("button", { testid: "evaluate", class: "primary", onclick: () => void this.evaluate() }, "Compare with my ground truth"),
+      h(
+        "div",
+        { class: "row small" },
+        largest,
+        h("label", { for: "seg-largest" }, "largest component"),
+        fill,
+        h("label", { for: "seg-fill" }, "fill holes"),
       ),
-      h("div", { class: "row small" }, this.showOverlay, h("label", { for: "show-overlay" }, "FP "), h("i", { class: "swatch fp" }), h("label", { for: "show-overlay" }, " / FN "), h("i", { class: "swatch fn" }), h("label", { for: "show-overlay" }, " on slices")),
+      h(
+        "div",
+        { class: "row" },
+        h(
+          "button",
+          {
+            testid: "seg-run",
+            onclick: () => void this.run(method.value, Number(smooth.value), largest.checked, fill.checked),
+          },
+          "Run segmentation",
+        ),
+      ),
+      h("div", { class: "row" }, this.segSel),
+      h(
+        "div",
+        { class: "row" },
+        h(
+          "button",
+          { testid: "evaluate", class: "primary", onclick: () => void this.evaluate() },
+          "Compare with my ground truth",
+        ),
+      ),
+      h(
+        "div",
+        { class: "row small" },
+        this.showOverlay,
+        h("label", { for: "show-overlay" }, "FP "),
+        h("i", { class: "swatch fp" }),
+        h("label", { for: "show-overlay" }, " / FN "),
+        h("i", { class: "swatch fn" }),
+        h("label", { for: "show-overlay" }, " on slices"),
+      ),
       this.table,
       h("div", { class: "row" }, starBox),
       h("div", { class: "row" }, this.comment),
-      h("div", { class: "row" }, h("button", { testid: "rating-save", onclick: () => void this.rate() }, "Save rating")),
+      h(
+        "div",
+        { class: "row" },
+        h("button", { testid: "rating-save", onclick: () => void this.rate() }, "Save rating"),
+      ),
       this.ratings,
     );
   }
@@ -120,7 +178,8 @@ export class EvalPanel {
     const prev = selectId ?? this.segSel.value;
     clear(this.segSel);
     if (this.segs.length === 0) this.segSel.append(h("option", { value: "" }, "no segmentation yet"));
-    for (const s of this.segs) this.segSel.append(h("option", { value: String(s.id) }, `${s.name || s.method} (${s.method})`));
+    for (const s of this.segs)
+      this.segSel.append(h("option", { value: String(s.id) }, `${s.name || s.method} (${s.method})`));
     if (prev !== undefined && this.segs.some((s) => String(s.id) === String(prev))) this.segSel.value = String(prev);
     this.selectionChanged();
   }
@@ -171,7 +230,13 @@ export class EvalPanel {
   private async run(method: string, smooth: number, largest: boolean, fill: boolean): Promise<void> {
     this.table.replaceChildren(h("p", { class: "muted" }, `running ${method}…`));
     try {
-      const body: { method: string; smooth?: number; largest_component: boolean; fill_holes: boolean; classes?: number } = { method, largest_component: largest, fill_holes: fill };
+      const body: {
+        method: string;
+        smooth?: number;
+        largest_component: boolean;
+        fill_holes: boolean;
+        classes?: number;
+      } = { method, largest_component: largest, fill_holes: fill };
       if (smooth > 0) body.smooth = smooth;
       if (method === "multi-otsu") body.classes = 3;
       const s = await this.ctx.api.segment(this.ctx.cell.id, body);
@@ -191,7 +256,11 @@ export class EvalPanel {
     const label = this.ctx.label();
     this.table.replaceChildren(h("p", { class: "muted" }, "comparing…"));
     try {
-      const m = await this.ctx.api.evaluate(this.ctx.cell.id, { label, reference: { user: this.ctx.me.name }, test: { segmentation: seg.id } });
+      const m = await this.ctx.api.evaluate(this.ctx.cell.id, {
+        label,
+        reference: { user: this.ctx.me.name },
+        test: { segmentation: seg.id },
+      });
       this.showMetrics(m, seg);
       if (!this.showOverlay.checked) this.toggleOverlay();
     } catch (e) {
@@ -202,9 +271,18 @@ export class EvalPanel {
   private showMetrics(m: Metrics, seg: Segmentation): void {
     const unit = this.ctx.cell.unit || "";
     const lname = this.ctx.labels().find((l) => l.id === this.ctx.label())?.name ?? `label ${this.ctx.label()}`;
-    const rows = ROWS.filter(([k]) => k in m).map(([k, title, kind]) => h("tr", {}, h("th", {}, title), h("td", { "data-key": k }, formatMetric(m[k], kind, unit))));
+    const rows = ROWS.filter(([k]) => k in m).map(([k, title, kind]) =>
+      h("tr", {}, h("th", {}, title), h("td", { "data-key": k }, formatMetric(m[k], kind, unit))),
+    );
     // An empty reference makes every overlap figure 0 or undefined: say why.
-    const noTruth = m.volume_gt === 0 ? h("p", { class: "warn", testid: "metrics-warning" }, `Your ${lname} is empty on this cell: trace it (or choose another component) before comparing.`) : null;
+    const noTruth =
+      m.volume_gt === 0
+        ? h(
+            "p",
+            { class: "warn", testid: "metrics-warning" },
+            `Your ${lname} is empty on this cell: trace it (or choose another component) before comparing.`,
+          )
+        : null;
     this.table.replaceChildren(
       ...(noTruth ? [noTruth] : []),
       h("table", {}, h("caption", {}, `${seg.method} vs ${this.ctx.me.name}'s ${lname}`), h("tbody", {}, ...rows)),
@@ -224,7 +302,11 @@ export class EvalPanel {
     if (!seg) return this.ctx.toast("choose a segmentation to rate", true);
     if (this.score < 1) return this.ctx.toast("choose 1 to 5 stars", true);
     try {
-      await this.ctx.api.rate(this.ctx.cell.id, { segmentation: seg.id, score: this.score, comment: this.comment.value.trim() });
+      await this.ctx.api.rate(this.ctx.cell.id, {
+        segmentation: seg.id,
+        score: this.score,
+        comment: this.comment.value.trim(),
+      });
       this.ctx.toast("rating saved");
       this.comment.value = "";
       this.setScore(0);
@@ -243,7 +325,15 @@ export class EvalPanel {
     try {
       const all: Rating[] = await this.ctx.api.ratings(this.ctx.cell.id);
       const mine = all.filter((r) => String(r.segmentation) === String(seg.id));
-      this.ratings.replaceChildren(...mine.map((r) => h("div", {}, `${"★".repeat(r.score)}${"☆".repeat(5 - r.score)} ${r.user ?? ""} ${r.comment ? "— " + r.comment : ""}`)));
+      this.ratings.replaceChildren(
+        ...mine.map((r) =>
+          h(
+            "div",
+            {},
+            `${"★".repeat(r.score)}${"☆".repeat(5 - r.score)} ${r.user ?? ""} ${r.comment ? "— " + r.comment : ""}`,
+          ),
+        ),
+      );
     } catch {
       this.ratings.replaceChildren();
     }

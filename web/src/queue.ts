@@ -15,7 +15,15 @@ import type { Axis } from "./transform";
 /** One queued change. */
 export type Op =
   | { kind: "contour"; cell: string; client_id: string; body: NewContour }
-  | { kind: "replace"; cell: string; client_id: string; axis: Axis; index: number; label: number; contours: NewContour[] }
+  | {
+      kind: "replace";
+      cell: string;
+      client_id: string;
+      axis: Axis;
+      index: number;
+      label: number;
+      contours: NewContour[];
+    }
   | { kind: "empty"; cell: string; client_id: string; axis: Axis; index: number; label: number };
 
 /** Where the queue persists (localStorage in the browser, a Map in tests). */

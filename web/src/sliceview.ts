@@ -6,7 +6,16 @@
  * handed to the owner through callbacks.
  */
 import { getStroke } from "perfect-freehand";
-import { canvasToSlice, fitTransform, panBy, sliceToCanvas, zoomAt, type Axis, type Vec2, type ViewTransform } from "./transform";
+import {
+  canvasToSlice,
+  fitTransform,
+  panBy,
+  sliceToCanvas,
+  zoomAt,
+  type Axis,
+  type Vec2,
+  type ViewTransform,
+} from "./transform";
 import type { Sample } from "./stroke";
 import { samplesOf } from "./stroke";
 import type { RawPixels } from "./windowing";
@@ -102,7 +111,17 @@ export class SliceView {
   /** Slice index shown. */
   index = 0;
   /** The scene painted over the image. */
-  scene: Scene = { cross: null, contours: [], rects: [], stroke: null, strokePen: false, overlay: null, caption: "", captionColor: "#ccc", working: false };
+  scene: Scene = {
+    cross: null,
+    contours: [],
+    rects: [],
+    stroke: null,
+    strokePen: false,
+    overlay: null,
+    caption: "",
+    captionColor: "#ccc",
+    working: false,
+  };
   private panning: { x: number; y: number; id: number } | null = null;
   private drawingId: number | null = null;
   private spaceDown = false;
@@ -326,7 +345,14 @@ export class SliceView {
       return;
     }
     // A smooth variable-width ink for the eye; the stored contour is the raw samples.
-    const outline = getStroke(pts, { size: 4, thinning: pen ? 0.5 : 0, smoothing: 0.5, streamline: 0.2, simulatePressure: false, last: false });
+    const outline = getStroke(pts, {
+      size: 4,
+      thinning: pen ? 0.5 : 0,
+      smoothing: 0.5,
+      streamline: 0.2,
+      simulatePressure: false,
+      last: false,
+    });
     if (outline.length < 3) return;
     ctx.beginPath();
     ctx.moveTo(outline[0][0], outline[0][1]);
@@ -381,7 +407,11 @@ export class SliceView {
         return;
       }
       if (this.drawingId === e.pointerId) {
-        this.handlers.penMove(this, samplesOf(e, (x, y) => this.clientToSlice(x, y)), e.timeStamp);
+        this.handlers.penMove(
+          this,
+          samplesOf(e, (x, y) => this.clientToSlice(x, y)),
+          e.timeStamp,
+        );
       }
       const [u, v] = this.clientToSlice(e.clientX, e.clientY);
       this.handlers.hover(this, u, v, true);

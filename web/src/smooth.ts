@@ -14,7 +14,13 @@
  * `indices`. Vertices at the same position are treated as one, so meshes with
  * duplicated corners smooth the same as welded ones.
  */
-export function taubin(vertices: ArrayLike<number>, indices: ArrayLike<number>, iterations = 12, lambda = 0.5, mu = -0.53): Float32Array {
+export function taubin(
+  vertices: ArrayLike<number>,
+  indices: ArrayLike<number>,
+  iterations = 12,
+  lambda = 0.5,
+  mu = -0.53,
+): Float32Array {
   const n = vertices.length / 3;
   // Weld: one id per distinct position.
   const id = new Int32Array(n);

@@ -176,7 +176,8 @@ export function renderGrey(raw: RawPixels, lut: Lut, out: Uint8ClampedArray): vo
 export function decodeSlice(buf: ArrayBuffer, dtype: Dtype, width: number, height: number): RawPixels {
   const n = width * height;
   const need = n * bytesPerVoxel(dtype);
-  if (buf.byteLength !== need) throw new Error(`${dtype} slice of ${width}x${height} has ${buf.byteLength} bytes, expected ${need}`);
+  if (buf.byteLength !== need)
+    throw new Error(`${dtype} slice of ${width}x${height} has ${buf.byteLength} bytes, expected ${need}`);
   if (dtype === "u8") return new Uint8Array(buf, 0, n);
   const dv = new DataView(buf);
   if (dtype === "u16") {

@@ -3,7 +3,14 @@ import { Api, ApiError } from "../src/api";
 
 /** A fetch that answers every request with `body` and `status`. */
 function answering(status: number, body: string, type = "application/json"): typeof fetch {
-  return async () => new Response(body, { status, statusText: status === 502 ? "Bad Gateway" : "", headers: { "Content-Type": type } });
+  return () =>
+    Promise.resolve(
+      new Response(body, {
+        status,
+        statusText: status === 502 ? "Bad Gateway" : "",
+        headers: { "Content-Type": type },
+      }),
+    );
 }
 
 async function failure(p: Promise<unknown>): Promise<ApiError> {

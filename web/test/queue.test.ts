@@ -16,10 +16,11 @@ class MemKV implements KV {
 function mockFetch(failures: number) {
   const stored = new Map<string, unknown>();
   let calls = 0;
-  const f = async (_url: RequestInfo | URL, init?: RequestInit): Promise<Response> => {
-    calls++;
-    if (calls <= failures) throw new TypeError("Failed to fetch");
-    const body = JSON.parse(String(init?.body ?? "{}"));
+  const answer = (init?: RequestInit): Response => {
+    const body = JSON.parse(typeof init?.body === "string" ? init.body : "{}") as {
+      client_id?: string;
+      label?: number;
+    };
     if (body.client_id) {
       if (!stored.has(body.client_id)) stored.set(body.client_id, { ...body, id: stored.size + 1 });
       return new Response(JSON.stringify(stored.get(body.client_id)), { status: 201 });
@@ -27,14 +28,28 @@ function mockFetch(failures: number) {
     if (body.label === 99) return new Response(JSON.stringify({ error: "unknown label" }), { status: 400 });
     return new Response(null, { status: 204 });
   };
-  return { f: f as typeof fetch, stored, calls: () => calls };
+  const f = (_url: RequestInfo | URL, init?: RequestInit): Promise<Response> => {
+    calls++;
+    if (calls <= failures) return Promise.reject(new TypeError("Failed to fetch"));
+    return Promise.resolve(answer(init));
+  };
+  return { f, stored, calls: () => calls };
 }
 
 const op = (id: string, index = 5): Op => ({
   kind: "contour",
   cell: "c1",
   client_id: id,
-  body: { label: 2, axis: "z", index, points: [[0, 0], [1, 0], [0, 1]] },
+  body: {
+    label: 2,
+    axis: "z",
+    index,
+    points: [
+      [0, 0],
+      [1, 0],
+      [0, 1],
+    ],
+  },
 });
 
 describe("outbox", () => {
@@ -87,14 +102,53 @@ describe("outbox", () => {
 
 describe("pending changes over server contours", () => {
   const server: Contour[] = [
-    { id: 1, label: 2, axis: "z", index: 5, points: [[0, 0], [1, 0], [0, 1]] },
-    { id: 2, label: 1, axis: "z", index: 5, points: [[0, 0], [2, 0], [0, 2]] },
+    {
+      id: 1,
+      label: 2,
+      axis: "z",
+      index: 5,
+      points: [
+        [0, 0],
+        [1, 0],
+        [0, 1],
+      ],
+    },
+    {
+      id: 2,
+      label: 1,
+      axis: "z",
+      index: 5,
+      points: [
+        [0, 0],
+        [2, 0],
+        [0, 2],
+      ],
+    },
   ];
   it("adds, replaces and empties", () => {
     const ops: Op[] = [
       op("n1", 10),
       { kind: "empty", cell: "c1", client_id: "e1", axis: "z", index: 5, label: 2 },
-      { kind: "replace", cell: "c1", client_id: "r1", axis: "z", index: 10, label: 2, contours: [{ label: 2, axis: "z", index: 10, points: [[5, 5], [6, 5], [5, 6]] }] },
+      {
+        kind: "replace",
+        cell: "c1",
+        client_id: "r1",
+        axis: "z",
+        index: 10,
+        label: 2,
+        contours: [
+          {
+            label: 2,
+            axis: "z",
+            index: 10,
+            points: [
+              [5, 5],
+              [6, 5],
+              [5, 6],
+            ],
+          },
+        ],
+      },
       op("other", 3),
     ];
     ops[3].cell = "c2";

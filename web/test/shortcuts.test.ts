@@ -1,7 +1,10 @@
 import { describe, expect, it } from "vitest";
 import { SHORTCUTS, actionOf } from "../src/shortcuts";
 
-const key = (k: string, m: Partial<{ ctrlKey: boolean; shiftKey: boolean; metaKey: boolean; altKey: boolean }> = {}) => ({
+const key = (
+  k: string,
+  m: Partial<{ ctrlKey: boolean; shiftKey: boolean; metaKey: boolean; altKey: boolean }> = {},
+) => ({
   key: k,
   ctrlKey: false,
   shiftKey: false,
@@ -25,8 +28,33 @@ describe("shortcuts", () => {
   });
   it("every help entry's action is reachable from some key", () => {
     const reachable = new Set<string>();
-    const keys = ["ArrowRight", "ArrowLeft", "ArrowUp", "ArrowDown", "PageDown", "PageUp", "Enter", "Escape", "c", "e", "i", "x", "y", "z", "1", "+", "-", "0", "w", "d", "o", "n", "?"];
-    for (const k of keys) for (const shift of [false, true]) reachable.add(String(actionOf(key(k, { shiftKey: shift }))));
+    const keys = [
+      "ArrowRight",
+      "ArrowLeft",
+      "ArrowUp",
+      "ArrowDown",
+      "PageDown",
+      "PageUp",
+      "Enter",
+      "Escape",
+      "c",
+      "e",
+      "i",
+      "x",
+      "y",
+      "z",
+      "1",
+      "+",
+      "-",
+      "0",
+      "w",
+      "d",
+      "o",
+      "n",
+      "?",
+    ];
+    for (const k of keys)
+      for (const shift of [false, true]) reachable.add(String(actionOf(key(k, { shiftKey: shift }))));
     reachable.add(String(actionOf(key("z", { ctrlKey: true }))));
     reachable.add(String(actionOf(key("y", { ctrlKey: true }))));
     for (const s of SHORTCUTS) expect(reachable.has(s.action)).toBe(true);

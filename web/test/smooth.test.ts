@@ -47,7 +47,11 @@ describe("Taubin smoothing", () => {
     // Two triangles of a square, each with its own copy of the shared edge.
     const v = [0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 0, 0, 1, 1, 0, 0, 1, 0];
     const out = taubin(v, [0, 1, 2, 3, 4, 5], 3);
-    for (const [a, b] of [[0, 3], [2, 4]]) for (let d = 0; d < 3; d++) expect(out[3 * a + d]).toBeCloseTo(out[3 * b + d], 12);
+    for (const [a, b] of [
+      [0, 3],
+      [2, 4],
+    ])
+      for (let d = 0; d < 3; d++) expect(out[3 * a + d]).toBeCloseTo(out[3 * b + d], 12);
   });
 
   it("keeps an empty mesh empty", () => {

@@ -1,5 +1,13 @@
 import { describe, expect, it } from "vitest";
-import { StrokeRecorder, closureIndex, samplesOf, signedArea2, toContour, type PointerLike, type Sample } from "../src/stroke";
+import {
+  StrokeRecorder,
+  closureIndex,
+  samplesOf,
+  signedArea2,
+  toContour,
+  type PointerLike,
+  type Sample,
+} from "../src/stroke";
 
 function circle(n: number, r: number, cx = 50, cy = 50, from = 0, to = 2 * Math.PI): Sample[] {
   const out: Sample[] = [];
@@ -94,7 +102,13 @@ describe("stroke handling", () => {
   });
 
   it("samplesOf uses every coalesced event", () => {
-    const mk = (x: number, y: number, p: number, t: number): PointerLike => ({ clientX: x, clientY: y, pressure: p, timeStamp: t, pointerType: "pen" });
+    const mk = (x: number, y: number, p: number, t: number): PointerLike => ({
+      clientX: x,
+      clientY: y,
+      pressure: p,
+      timeStamp: t,
+      pointerType: "pen",
+    });
     const ev: PointerLike = {
       ...mk(30, 30, 0.9, 30),
       getCoalescedEvents: () => [mk(10, 10, 0.2, 10), mk(20, 20, 0.5, 20), mk(30, 30, 0.9, 30)],

@@ -1,5 +1,15 @@
 import { describe, expect, it } from "vitest";
-import { canvasToSlice, fitTransform, panBy, pixelAt, sliceToCanvas, voxelOf, zoomAt, sliceShape, type ViewTransform } from "../src/transform";
+import {
+  canvasToSlice,
+  fitTransform,
+  panBy,
+  pixelAt,
+  sliceToCanvas,
+  voxelOf,
+  zoomAt,
+  sliceShape,
+  type ViewTransform,
+} from "../src/transform";
 
 // Deterministic pseudo-random numbers for property checks.
 function rng(seed: number) {
@@ -33,7 +43,12 @@ describe("canvas <-> slice transform", () => {
   it("round-trips for random transforms and points", () => {
     const r = rng(7);
     for (let n = 0; n < 2000; n++) {
-      const tt: ViewTransform = { scale: 0.1 + r() * 50, aspect: 0.25 + r() * 4, ox: (r() - 0.5) * 1000, oy: (r() - 0.5) * 1000 };
+      const tt: ViewTransform = {
+        scale: 0.1 + r() * 50,
+        aspect: 0.25 + r() * 4,
+        ox: (r() - 0.5) * 1000,
+        oy: (r() - 0.5) * 1000,
+      };
       const u = (r() - 0.5) * 600;
       const v = (r() - 0.5) * 600;
       const [x, y] = sliceToCanvas(tt, u, v);

@@ -72,7 +72,7 @@ describe("window/level", () => {
   it("auto window ignores the extreme tails on 16-bit data", () => {
     // Background at 1000-1255, cell at 20000-20255, one hot voxel bin at 65000.
     const bw = 256;
-    const counts = new Array(256).fill(0);
+    const counts = new Array<number>(256).fill(0);
     counts[Math.floor(1000 / bw)] = 50000;
     counts[Math.floor(20000 / bw)] = 49000;
     counts[Math.floor(65000 / bw)] = 10;
@@ -162,8 +162,20 @@ describe("binary slices of every voxel type", () => {
     const w = { lo: -160.5, hi: 240.25 };
     for (const d of DTYPES) {
       const lut = buildLut(d, w);
-      const vals = d === "f32" ? [-1e30, -160.5, -160.4, 0, 39.9, 240.2, 240.25, 1e30, -Infinity, Infinity] : samples[d].concat([-160, 40, 240, 241]).filter((v) => (d === "i16" ? true : v >= 0) && (d === "u8" ? v <= 255 : true));
-      const raw: RawPixels = d === "u8" ? Uint8Array.from(vals) : d === "u16" ? Uint16Array.from(vals) : d === "i16" ? Int16Array.from(vals) : Float32Array.from(vals);
+      const vals =
+        d === "f32"
+          ? [-1e30, -160.5, -160.4, 0, 39.9, 240.2, 240.25, 1e30, -Infinity, Infinity]
+          : samples[d]
+              .concat([-160, 40, 240, 241])
+              .filter((v) => (d === "i16" ? true : v >= 0) && (d === "u8" ? v <= 255 : true));
+      const raw: RawPixels =
+        d === "u8"
+          ? Uint8Array.from(vals)
+          : d === "u16"
+            ? Uint16Array.from(vals)
+            : d === "i16"
+              ? Int16Array.from(vals)
+              : Float32Array.from(vals);
       const out = new Uint8ClampedArray(4 * raw.length);
       renderGrey(raw, lut, out);
       raw.forEach((v, p) => {
@@ -207,21 +219,40 @@ describe("binary slices of every voxel type", () => {
 /** A histogram of 256 bins from `min` with `count` voxels at each of `at` (value → count). */
 function hist(min: number, max: number, at: [number, number][]): Histogram {
   const bin_width = Math.ceil((max - min + 1) / 256);
-  const counts = new Array(256).fill(0);
+  const counts = new Array<number>(256).fill(0);
   for (const [v, n] of at) counts[Math.min(255, Math.floor((v - min) / bin_width))] += n;
   return { min, max, bin_width, counts };
 }
 
 describe("window presets", () => {
   // A chest CT: air around the body, lung, soft tissue, bone.
-  const chest = hist(-1024, 3071, [[-1000, 40000], [-850, 15000], [40, 35000], [700, 10000]]);
+  const chest = hist(-1024, 3071, [
+    [-1000, 40000],
+    [-850, 15000],
+    [40, 35000],
+    [700, 10000],
+  ]);
   // A head CT with the scanner's -3024 padding outside the field of view, no lung.
-  const head = hist(-3024, 3071, [[-3024, 20000], [-1000, 10000], [30, 50000], [1000, 20000]]);
+  const head = hist(-3024, 3071, [
+    [-3024, 20000],
+    [-1000, 10000],
+    [30, 50000],
+    [1000, 20000],
+  ]);
   // An MR: non-negative, no air at -1000.
-  const mr = hist(0, 1800, [[0, 30000], [400, 50000], [900, 20000]]);
+  const mr = hist(0, 1800, [
+    [0, 30000],
+    [400, 50000],
+    [900, 20000],
+  ]);
 
   it("the CT windows in Hounsfield units", () => {
-    const w = (id: string) => presetWindow(CT_PRESETS.find((p) => p.id === id)!, chest, chest);
+    const w = (id: string) =>
+      presetWindow(
+        CT_PRESETS.find((p) => p.id === id)!,
+        chest,
+        chest,
+      );
     expect(w("ct-lung")).toEqual({ lo: -1350, hi: 150 });
     expect(w("ct-soft-tissue")).toEqual({ lo: -160, hi: 240 });
     expect(w("ct-bone")).toEqual({ lo: -500, hi: 1300 });
@@ -243,11 +274,25 @@ describe("window presets", () => {
     // Unsigned data never holds Hounsfield units.
     expect(looksLikeCT(chest, "u16")).toBe(false);
     // A few negative voxels (an MR after filtering) are not air.
-    expect(looksLikeCT(hist(-950, 1800, [[-950, 10], [400, 100000]]), "f32")).toBe(false);
+    expect(
+      looksLikeCT(
+        hist(-950, 1800, [
+          [-950, 10],
+          [400, 100000],
+        ]),
+        "f32",
+      ),
+    ).toBe(false);
   });
 
   it("offers the CT windows for CT only; opens chest CT in the lung window, other CT in soft tissue, the rest automatic", () => {
-    expect(presetsFor(chest, "i16").map((p) => p.id)).toEqual(["auto", "ct-soft-tissue", "ct-lung", "ct-bone", "ct-brain"]);
+    expect(presetsFor(chest, "i16").map((p) => p.id)).toEqual([
+      "auto",
+      "ct-soft-tissue",
+      "ct-lung",
+      "ct-bone",
+      "ct-brain",
+    ]);
     expect(presetsFor(mr, "i16")).toEqual([AUTO_PRESET]);
     expect(presetsFor(null, "i16")).toEqual([AUTO_PRESET]);
     expect(defaultPreset(chest, "i16").id).toBe("ct-lung");
