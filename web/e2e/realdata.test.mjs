@@ -293,14 +293,23 @@ test("a DICOM series (a folder of .dcm files) opens as one cell with its slice s
   assert.equal(await page.getByTestId("window-preset").inputValue(), "auto");
   for (const a of ["z", "y", "x"]) {
     const s = await viewStats(page, a);
-    assert.ok(s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5, `view ${a} shows anatomy: ${JSON.stringify(s)}`);
+    assert.ok(
+      s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5,
+      `view ${a} shows anatomy: ${JSON.stringify(s)}`,
+    );
   }
   // The slices are the voxels the CLI reads from the same folder.
   const lo = await num("window-low");
   const hi = await num("window-high");
   const [[u, v, val]] = await pixelsIn(page, "z", Math.ceil(lo + (hi - lo) / 3), hi, 1);
-  const [x, y] = await page.evaluate(([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5), [u, v]);
+  const [x, y] = await page.evaluate(
+    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
+    [u, v],
+  );
   await page.mouse.move(x, y);
-  await page.getByTestId("status-value").filter({ hasText: `value ${val}` }).waitFor();
+  await page
+    .getByTestId("status-value")
+    .filter({ hasText: `value ${val}` })
+    .waitFor();
   await shot(page, "realdata-dicom-mr");
 });
