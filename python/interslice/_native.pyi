@@ -59,6 +59,15 @@ def interpolate(
     method: str | None = None,
 ) -> npt.NDArray[Any]: ...
 def methods() -> list[MethodInfo]: ...
+def advise(
+    labels: npt.NDArray[Any],
+    drawn: Sequence[int] | None = None,
+    axis: Axis | None = None,
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    image: npt.NDArray[Any] | None = None,
+    method: str | None = None,
+    count: int = 5,
+) -> dict[str, Any]: ...
 def threshold(
     image: npt.NDArray[Any],
     method: Literal["otsu", "rosin", "kmeans", "multi-otsu"] = "otsu",

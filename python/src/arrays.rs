@@ -166,6 +166,33 @@ pub(crate) fn voxels<'a, T: Element + Copy>(
     }
 }
 
+/// A voxel type read as an intensity (what the image-aware methods use).
+pub(crate) trait Intensity: Copy {
+    fn to_f32(self) -> f32;
+}
+macro_rules! intensity {
+    ($($t:ty),*) => {$(impl Intensity for $t {
+        #[inline]
+        fn to_f32(self) -> f32 { self as f32 }
+    })*};
+}
+intensity!(u8, i8, u16, i16, u32, i32, u64, i64, f32, f64);
+impl Intensity for bool {
+    #[inline]
+    fn to_f32(self) -> f32 {
+        f32::from(u8::from(self))
+    }
+}
+
+/// The voxels of an intensity array as f32, x-fastest (the GIL released
+/// while converting).
+pub(crate) fn intensities_f32(py: Python<'_>, a: &AnyArray<'_>) -> Vec<f32> {
+    with_array!(a, x => {
+        let v = voxels(x, Some(Order::XFast));
+        py.detach(|| v.data.iter().map(|&e| e.to_f32()).collect())
+    })
+}
+
 /// A voxel type that may hold a label (an integer 0..=65535).
 pub(crate) trait LabelValue: Copy {
     /// The label, or `None` when the value is not one.

@@ -1,14 +1,15 @@
-//! `interpolate` and `methods`.
-use crate::arrays::{AnyArray, FromLabel, any_array, to_numpy, with_array};
+//! `interpolate`, `advise` and `methods`.
+use crate::arrays::{AnyArray, FromLabel, any_array, intensities_f32, to_numpy, with_array};
 use crate::metrics::{labels_u16, spacing3};
 use crate::volumes::geometry;
 use crate::{error, parse_axis};
-use interslice_core::{LabelVolume, LengthUnit, Volume};
+use interslice_core::{Axis, LabelVolume, LengthUnit, Volume};
 use interslice_interp::drawn::nonempty_slices;
-use interslice_interp::{DEFAULT_METHOD, by_name, interpolate_labels};
+use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interpolate_labels};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::sync::Arc;
 
 /// Interpolate the slices between the drawn slices of a label array, as
 /// `interslice interpolate` does (the same result voxel for voxel).
@@ -20,8 +21,8 @@ use pyo3::types::PyDict;
 /// slices holding any non-zero voxel are the drawn ones. Every label is
 /// interpolated on its own and painted in ascending order. `spacing` is
 /// `(sx, sy, sz)`; `method` names one of `methods()` (default: the best
-/// measured one). `image` is the intensity array on the same grid, for
-/// image-aware methods. Returns a new Fortran-ordered array of the input's
+/// measured one; with `image`, the image-aware one). `image` is the
+/// intensity array on the same grid (any numeric dtype). Returns a new Fortran-ordered array of the input's
 /// dtype; the drawn slices are reproduced exactly. The GIL is released
 /// while the interpolation runs.
 #[pyfunction]
@@ -36,33 +37,98 @@ pub fn interpolate<'py>(
     image: Option<&Bound<'py, PyAny>>,
     method: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let axis = match axis {
-        Some(a) => parse_axis(a)?,
-        None => interslice_core::Axis::Z,
-    };
-    let spacing = spacing3(spacing)?;
     let a = any_array(labels, "labels")?;
     let dims = a.shape();
-    if let Some(img) = image {
-        let i = any_array(img, "image")?;
-        if i.shape() != dims {
-            return Err(error(format!(
-                "image and labels differ: shape {:?} vs {dims:?}",
-                i.shape()
-            )));
-        }
-        return Err(error(
-            "no image-aware interpolation method is available in this build",
-        ));
+    let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
+    let result = py
+        .detach(|| interpolate_labels(t.method.as_ref(), &t.sparse, t.axis, &t.drawn))
+        .map_err(error)?;
+    let (_, out) = result.into_parts();
+    Ok(match a {
+        AnyArray::U16(_) => to_numpy(py, out, dims)?.into_any(),
+        ref other => with_array!(other, x => like(py, x, &out, dims)?),
+    })
+}
+
+/// Which undrawn slices to trace next, as `interslice advise --json` prints
+/// it: `{"axis", "drawn", "suggestions": [{"slice", "gain_voxels",
+/// "dice_gain", "between"}, ...], "predicted_dice", "volume_voxels"}`, the
+/// `count` best suggestions first. The arguments mean what they mean for
+/// `interpolate` (the advice is for the interpolation `method` and `image`
+/// would give). The GIL is released while it runs.
+#[pyfunction]
+#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, count=5))]
+#[allow(clippy::too_many_arguments)]
+pub fn advise<'py>(
+    py: Python<'py>,
+    labels: &Bound<'py, PyAny>,
+    drawn: Option<Vec<i64>>,
+    axis: Option<&Bound<'py, PyAny>>,
+    spacing: Vec<f64>,
+    image: Option<&Bound<'py, PyAny>>,
+    method: Option<&str>,
+    count: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    if !(1..=1000).contains(&count) {
+        return Err(error(format!("count must be 1..=1000, got {count}")));
     }
-    let method = by_name(method.unwrap_or(DEFAULT_METHOD)).map_err(error)?;
-    let g = geometry(dims, spacing, LengthUnit::Unknown)?;
-    let data = labels_u16(py, &a, "labels")?;
-    let sparse: LabelVolume = Volume::from_vec(g, data).map_err(error)?;
-    let count = sparse.slice_count(axis) as i64;
-    let drawn: Option<Vec<usize>> = drawn
-        .map(|d| {
-            d.into_iter()
+    let a = any_array(labels, "labels")?;
+    let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
+    let advice = py
+        .detach(|| {
+            interslice_interp::advise::advise(&t.sparse, t.axis, &t.drawn, count, t.method.as_ref())
+        })
+        .map_err(error)?;
+    crate::to_py(py, &advice)
+}
+
+/// A tracing handed in from Python: the sparse labels, the axis, the drawn
+/// slices and the method (image-aware when an image is given).
+struct Tracing {
+    sparse: LabelVolume,
+    axis: Axis,
+    drawn: Vec<usize>,
+    method: Box<dyn Interpolator>,
+}
+
+impl Tracing {
+    fn of<'py>(
+        py: Python<'py>,
+        a: &AnyArray<'py>,
+        drawn: Option<Vec<i64>>,
+        axis: Option<&Bound<'py, PyAny>>,
+        spacing: Vec<f64>,
+        image: Option<&Bound<'py, PyAny>>,
+        method: Option<&str>,
+    ) -> PyResult<Tracing> {
+        let axis = match axis {
+            Some(a) => parse_axis(a)?,
+            None => Axis::Z,
+        };
+        let spacing = spacing3(spacing)?;
+        let dims = a.shape();
+        let g = geometry(dims, spacing, LengthUnit::Unknown)?;
+        let image = match image {
+            Some(img) => {
+                let i = any_array(img, "image")?;
+                if i.shape() != dims {
+                    return Err(error(format!(
+                        "image and labels differ: shape {:?} vs {dims:?}",
+                        i.shape()
+                    )));
+                }
+                let data = intensities_f32(py, &i);
+                Some(Arc::new(Volume::from_vec(g.clone(), data).map_err(error)?))
+            }
+            None => None,
+        };
+        let method = by_name_with_image(method, image).map_err(error)?;
+        let data = labels_u16(py, a, "labels")?;
+        let sparse: LabelVolume = Volume::from_vec(g, data).map_err(error)?;
+        let count = sparse.slice_count(axis) as i64;
+        let drawn = match drawn {
+            Some(d) => d
+                .into_iter()
                 .map(|i| {
                     usize::try_from(i)
                         .ok()
@@ -73,20 +139,16 @@ pub fn interpolate<'py>(
                             ))
                         })
                 })
-                .collect::<PyResult<Vec<usize>>>()
+                .collect::<PyResult<Vec<usize>>>()?,
+            None => py.detach(|| nonempty_slices(&sparse, axis)),
+        };
+        Ok(Tracing {
+            sparse,
+            axis,
+            drawn,
+            method,
         })
-        .transpose()?;
-    let result = py
-        .detach(|| {
-            let drawn = drawn.unwrap_or_else(|| nonempty_slices(&sparse, axis));
-            interpolate_labels(method.as_ref(), &sparse, axis, &drawn)
-        })
-        .map_err(error)?;
-    let (_, out) = result.into_parts();
-    Ok(match a {
-        AnyArray::U16(_) => to_numpy(py, out, dims)?.into_any(),
-        ref other => with_array!(other, x => like(py, x, &out, dims)?),
-    })
+    }
 }
 
 /// `labels` as an array of the element type of `_like` (every label fits:

@@ -79,6 +79,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics::staple, m)?)?;
     m.add_function(wrap_pyfunction!(interp::interpolate, m)?)?;
     m.add_function(wrap_pyfunction!(interp::methods, m)?)?;
+    m.add_function(wrap_pyfunction!(interp::advise, m)?)?;
     m.add_function(wrap_pyfunction!(segment::threshold, m)?)?;
     Ok(())
 }

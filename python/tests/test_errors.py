@@ -69,6 +69,12 @@ def test_interpolation_errors():
         interslice.interpolate(np.full((4, 4, 6), 0.5))
     with pytest.raises(interslice.Error, match="3-D"):
         interslice.interpolate(np.zeros((4, 4), np.uint8))
+    with pytest.raises(interslice.Error, match="image and labels differ"):
+        interslice.interpolate(a, drawn=[1, 4], image=np.zeros((4, 4, 5), np.float32))
+    with pytest.raises(interslice.Error, match="at least two drawn slices"):
+        interslice.advise(a)
+    with pytest.raises(interslice.Error, match="count must be"):
+        interslice.advise(a, drawn=[1, 4], count=0)
 
 
 def test_evaluate_errors(cli, tmp_path):

@@ -1,5 +1,7 @@
 """`interpolate` gives the command line's output voxel for voxel."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -15,8 +17,8 @@ def test_methods_list_the_default_first(cli):
     assert ms[0]["name"] == interslice.DEFAULT_METHOD and ms[0]["default"]
     assert sum(m["default"] for m in ms) == 1
     listed = [line.split()[0] for line in cli("interpolate", "--list").stdout.splitlines() if line.strip()]
-    # The CLI also lists the image-guided method (it needs --image); the
-    # binding's interpolate(image=...) does not take an image yet.
+    # The CLI also lists the image-guided method: it needs an image, and is
+    # what interpolate(image=...) uses without a method.
     assert listed[-1] == "image-guided"
     assert [m["name"] for m in ms] == listed[:-1]
 
@@ -60,3 +62,31 @@ def test_other_axes_dtypes_and_layouts(tmp_path, cli, phantom_files):
         got = interslice.interpolate(arr, drawn=drawn, axis=0, spacing=meta["spacing"])
         assert got.dtype == arr.dtype
         np.testing.assert_array_equal(got, want)
+
+
+def test_interpolate_with_the_image_equals_the_cli(tmp_path, cli, phantom_files):
+    f = phantom_files
+    out = tmp_path / "guided.nii.gz"
+    cli("interpolate", f["sparse"], "--drawn", f["drawn"], "--image", f["image"], "--out", out)
+    want, _ = interslice.read(out)
+    sparse, meta = interslice.read(f["sparse"])
+    image, _ = interslice.read(f["image"])
+    got = interslice.interpolate(sparse, drawn=drawn_list(f["drawn"]), spacing=meta["spacing"], image=image)
+    np.testing.assert_array_equal(got, want)
+    # Any numeric dtype of the image gives the same result.
+    again = interslice.interpolate(
+        sparse, drawn=drawn_list(f["drawn"]), spacing=meta["spacing"], image=image.astype(np.float64)
+    )
+    np.testing.assert_array_equal(again, want)
+
+
+def test_advise_equals_the_cli(cli, phantom_files):
+    f = phantom_files
+    want = json.loads(cli("advise", f["sparse"], "--drawn", f["drawn"], "--count", 4, "--json").stdout)
+    sparse, meta = interslice.read(f["sparse"])
+    got = interslice.advise(sparse, drawn=drawn_list(f["drawn"]), spacing=meta["spacing"], count=4)
+    assert got == want
+    assert len(got["suggestions"]) == 4
+    drawn = set(drawn_list(f["drawn"]))
+    assert all(s["slice"] not in drawn for s in got["suggestions"])
+    assert 0.5 < got["predicted_dice"] <= 1.0
