@@ -205,17 +205,18 @@ class InterpolateWidget(Container):
 
     def _suggest(self, layer, sparse, drawn, axis, spacing, img) -> None:
         """Show the next slice worth painting, when interslice can advise."""
-        advise = getattr(interslice, "advise", None)
-        if advise is None:
-            return
-        best = advise(sparse.T, drawn=drawn, axis=2 - axis, spacing=spacing, image=img, count=1)
+        advice = interslice.advise(sparse.T, drawn=drawn, axis=2 - axis, spacing=spacing, image=img, count=1)
+        best = advice["suggestions"]
         if not best:
             self.suggestion_label.value = ""
             self.goto_button.visible = False
             return
-        index = int(best[0]["index"])
+        index = int(best[0]["slice"])
         self._suggested = (axis + self._viewer.dims.ndim - layer.ndim, index)
-        self.suggestion_label.value = f"next slice to paint: {index}"
+        self.suggestion_label.value = (
+            f"next slice to paint: {index} (predicted Dice now {advice['predicted_dice']:.3f}, "
+            f"+{best[0]['dice_gain']:.4f} with it)"
+        )
         self.goto_button.visible = True
 
     def _go_to_suggestion(self) -> None:

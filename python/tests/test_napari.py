@@ -1,6 +1,7 @@
 """The napari dock widget, headless (Qt offscreen): a nucleus painted on
 every 5th slice is interpolated to Dice > 0.95 against the truth, the
-painted slices stay as painted, and the metrics table is filled."""
+painted slices stay as painted, the next slice worth painting is shown, and
+the metrics table is filled."""
 
 import numpy as np
 import pytest
@@ -41,6 +42,13 @@ def test_widget_interpolates_painted_slices(make_napari_viewer):
     got = np.asarray(painted.data)
     assert dice(got, truth) > 0.95, dice(got, truth)
     np.testing.assert_array_equal(got[zs], before[zs])
+
+    # The next slice worth painting is shown, and the button goes there.
+    assert "next slice to paint" in widget.suggestion_label.value, widget.suggestion_label.value
+    suggested = int(widget.suggestion_label.value.split(":")[1].split()[0])
+    assert suggested not in zs and zs[0] < suggested < zs[-1]
+    widget._go_to_suggestion()
+    assert viewer.dims.current_step[0] == suggested
 
     # A slice painted after the first run counts as painted too.
     z = zs[2] + 2
