@@ -7,7 +7,7 @@
 //! can re-import, so [`read`] validates everything a later step relies on
 //! (known labels, slices in range, finite points) and fails with one line.
 //!
-//! [`write`] lays the JSON out one label, contour or empty slice per line:
+//! [`write()`] lays the JSON out one label, contour or empty slice per line:
 //! readable, diff-friendly, and byte-identical on a read/write round trip.
 use crate::{Axis, Contour, CoreError, Geometry, LengthUnit, SliceRef};
 use serde::{Deserialize, Serialize};

@@ -19,7 +19,7 @@
 //!    slices, an unmatched branch of a split) is capped by a sphere through
 //!    its cross-section (equivalent radius `r`) with its centre `c` past the
 //!    drawn slice: the cross-section shrinks (or first widens, for `c > 0`)
-//!    by the ratio `ρ(z) / r`, `ρ(z)² = r² + 2cz − z²` ([`Cap`]), applied to
+//!    by the ratio `ρ(z) / r`, `ρ(z)² = r² + 2cz − z²` (`Cap`), applied to
 //!    the signed distance measured from the pixel edges, so that the cap
 //!    vanishes where `ρ` does whatever the cross-section's shape. When the
 //!    object shows on the previous drawn slice too, the sphere through both

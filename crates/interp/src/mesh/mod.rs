@@ -2,7 +2,7 @@
 //! meshes of label masks, and voxelisation.
 //!
 //! Every mesh method builds a closed triangle surface from the drawn slices
-//! ([`Interpolator::surface_mesh`](crate::Interpolator::surface_mesh)), voxelises it ([`voxelize::voxelize`]: voxel centre inside
+//! ([`crate::Interpolator::surface_mesh`]), voxelises it ([`voxelize::voxelize`]: voxel centre inside
 //! the mesh) and then **overwrites every drawn slice with its tracing**. The
 //! surfaces do not pass exactly through the traced pixel boundaries (marching
 //! cubes cuts between pixel centres, the splat inflates, Delaunay leaves
