@@ -7,7 +7,7 @@
 //! can re-import, so [`read`] validates everything a later step relies on
 //! (known labels, slices in range, finite points) and fails with one line.
 //!
-//! [`write`] lays the JSON out one label, contour or empty slice per line:
+//! [`write()`] lays the JSON out one label, contour or empty slice per line:
 //! readable, diff-friendly, and byte-identical on a read/write round trip.
 use crate::{Axis, Contour, CoreError, Geometry, LengthUnit, SliceRef};
 use serde::{Deserialize, Serialize};
@@ -180,16 +180,32 @@ impl ContourFile {
             }
             Ok(())
         };
+        // The label of a contour or a drawn-empty mark must be listed.
+        let known = |label: u16, at: &dyn Fn() -> String| {
+            if ids.contains(&label) {
+                Ok(())
+            } else {
+                Err(invalid(format!(
+                    "{}: label {label} is not in \"labels\"",
+                    at()
+                )))
+            }
+        };
         let mut traced: HashSet<(SliceRef, u16, &str)> = HashSet::new();
         for (n, c) in self.contours.iter().enumerate() {
             let at = || format!("contour #{n} (label {}, slice {})", c.label, c.slice);
-            if !ids.contains(&c.label) {
-                return Err(invalid(format!(
-                    "{}: label {} is not in \"labels\"",
-                    at(),
-                    c.label
-                )));
-            }
+            let per_point = |what: &str, len: usize| {
+                if len == c.points.len() {
+                    Ok(())
+                } else {
+                    Err(invalid(format!(
+                        "{}: {len} {what} for {} points",
+                        at(),
+                        c.points.len()
+                    )))
+                }
+            };
+            known(c.label, &at)?;
             in_range(c.slice).map_err(|e| invalid(format!("{}: {e}", at())))?;
             if let Some(p) = c
                 .points
@@ -199,27 +215,13 @@ impl ContourFile {
                 return Err(invalid(format!("{}: point #{p} is not finite", at())));
             }
             if let Some(pr) = &c.pressure {
-                if pr.len() != c.points.len() {
-                    return Err(invalid(format!(
-                        "{}: {} pressure values for {} points",
-                        at(),
-                        pr.len(),
-                        c.points.len()
-                    )));
-                }
+                per_point("pressure values", pr.len())?;
                 if pr.iter().any(|p| !(0.0..=1.0).contains(p)) {
                     return Err(invalid(format!("{}: pressure outside 0..=1", at())));
                 }
             }
             if let Some(t) = &c.times_ms {
-                if t.len() != c.points.len() {
-                    return Err(invalid(format!(
-                        "{}: {} times for {} points",
-                        at(),
-                        t.len(),
-                        c.points.len()
-                    )));
-                }
+                per_point("times", t.len())?;
                 if t.iter().any(|t| !t.is_finite()) {
                     return Err(invalid(format!("{}: a time is not finite", at())));
                 }
@@ -228,13 +230,7 @@ impl ContourFile {
         }
         for (n, e) in self.drawn_empty.iter().enumerate() {
             let at = || format!("drawn_empty #{n} (label {}, slice {})", e.label, e.slice);
-            if !ids.contains(&e.label) {
-                return Err(invalid(format!(
-                    "{}: label {} is not in \"labels\"",
-                    at(),
-                    e.label
-                )));
-            }
+            known(e.label, &at)?;
             in_range(e.slice).map_err(|err| invalid(format!("{}: {err}", at())))?;
             if traced.contains(&(e.slice, e.label, e.author.as_str())) {
                 return Err(invalid(format!(
@@ -608,51 +604,65 @@ mod tests {
                 .contains("expected \"interslice-contours\"")
         );
         assert!(err("{\"version\": 1}").contains("no \"format\""));
-        assert!(
-            err(&GOLDEN.replace("\"version\": 1", "\"version\": 2"))
-                .contains("unsupported version 2")
-        );
-        assert!(
-            err(&GOLDEN.replace("\"version\": 1", "\"version\": \"1\""))
-                .contains("unsupported version")
-        );
-        // Slice out of range: z has 24 slices.
-        let e = err(&GOLDEN.replace("\"axis\":\"z\",\"index\":10", "\"axis\":\"z\",\"index\":24"));
-        assert!(e.contains("out of range"), "{e}");
-        // Unknown label.
-        let e = err(&GOLDEN.replace("\"index\":20,\"label\":3", "\"index\":20,\"label\":9"));
-        assert!(e.contains("label 9 is not in"), "{e}");
-        let e = err(&GOLDEN.replace("\"index\":2,\"label\":2", "\"index\":2,\"label\":7"));
-        assert!(e.contains("label 7 is not in"), "{e}");
-        // Non-finite points cannot be written as JSON numbers: overflow and null.
-        assert!(err(&GOLDEN.replace("[10.5,4.0]", "[1e999,4.0]")).contains("contours file"));
-        assert!(err(&GOLDEN.replace("[10.5,4.0]", "[null,4.0]")).contains("contours file"));
-        assert!(
-            err(&GOLDEN.replace("\"axis\":\"x\"", "\"axis\":\"w\"")).contains("unknown variant")
-        );
-        assert!(
-            err(&GOLDEN.replace("\"unit\":\"um\"", "\"unit\":\"furlong\""))
-                .contains("unknown unit")
-        );
-        assert!(
-            err(&GOLDEN.replace("\"dims\":[40,32,24]", "\"dims\":[40,0,24]")).contains("contain 0")
-        );
-        assert!(err(&GOLDEN.replace("\"#1f77b4\"", "\"blue\"")).contains("#rrggbb"));
-        assert!(
-            err(&GOLDEN.replace("\"tool\":\"pen\"", "\"tool\":\"pen\",\"colour\":1"))
-                .contains("unknown field")
-        );
-        assert!(
-            err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,0.75]"))
-                .contains("3 pressure values for 4 points")
-        );
-        assert!(
-            err(&GOLDEN.replace("[0.5,0.625,0.75,0.5]", "[0.5,0.625,1.75,0.5]"))
-                .contains("pressure outside")
-        );
-        // Drawn empty where the same author traced the same label.
-        let e = err(&GOLDEN.replace("\"index\":2,\"label\":2", "\"index\":12,\"label\":2"));
-        assert!(e.contains("also has a contour"), "{e}");
+        // (replace, with, the error names): one edit of the golden file each.
+        let cases: [(&str, &str, &str); 15] = [
+            ("\"version\": 1", "\"version\": 2", "unsupported version 2"),
+            (
+                "\"version\": 1",
+                "\"version\": \"1\"",
+                "unsupported version",
+            ),
+            // Slice out of range: z has 24 slices.
+            (
+                "\"axis\":\"z\",\"index\":10",
+                "\"axis\":\"z\",\"index\":24",
+                "out of range",
+            ),
+            // Unknown label.
+            (
+                "\"index\":20,\"label\":3",
+                "\"index\":20,\"label\":9",
+                "label 9 is not in",
+            ),
+            (
+                "\"index\":2,\"label\":2",
+                "\"index\":2,\"label\":7",
+                "label 7 is not in",
+            ),
+            // Non-finite points cannot be written as JSON numbers: overflow and null.
+            ("[10.5,4.0]", "[1e999,4.0]", "contours file"),
+            ("[10.5,4.0]", "[null,4.0]", "contours file"),
+            ("\"axis\":\"x\"", "\"axis\":\"w\"", "unknown variant"),
+            ("\"unit\":\"um\"", "\"unit\":\"furlong\"", "unknown unit"),
+            ("\"dims\":[40,32,24]", "\"dims\":[40,0,24]", "contain 0"),
+            ("\"#1f77b4\"", "\"blue\"", "#rrggbb"),
+            (
+                "\"tool\":\"pen\"",
+                "\"tool\":\"pen\",\"colour\":1",
+                "unknown field",
+            ),
+            (
+                "[0.5,0.625,0.75,0.5]",
+                "[0.5,0.625,0.75]",
+                "3 pressure values for 4 points",
+            ),
+            (
+                "[0.5,0.625,0.75,0.5]",
+                "[0.5,0.625,1.75,0.5]",
+                "pressure outside",
+            ),
+            // Drawn empty where the same author traced the same label.
+            (
+                "\"index\":2,\"label\":2",
+                "\"index\":12,\"label\":2",
+                "also has a contour",
+            ),
+        ];
+        for (from, to, says) in cases {
+            assert!(GOLDEN.contains(from), "{from}");
+            let e = err(&GOLDEN.replace(from, to));
+            assert!(e.contains(says), "{from} -> {to}: {e}");
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! and touches every voxel once. Written here because no maintained crate
 //! labels 3D masks in this storage order with anisotropy-aware smoothing;
 //! the algorithms are classic (Rosenfeld & Pfaltz two-pass labelling on runs).
+use crate::regions::UnionFind;
 use crate::{Axis, Cancel, CoreError, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
@@ -94,38 +95,12 @@ fn runs_of(data: &[bool], dims: [usize; 3], value: bool) -> Runs {
     Runs { row_start, span }
 }
 
-/// Union-find with path halving and union by index (the smaller root wins,
-/// so roots are the first run of each component in scan order).
-struct UnionFind(Vec<u32>);
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        UnionFind((0..n as u32).collect())
-    }
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let p = self.0[x as usize];
-            self.0[x as usize] = self.0[p as usize];
-            x = self.0[x as usize];
-        }
-        x
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra < rb {
-            self.0[rb as usize] = ra;
-        } else if rb < ra {
-            self.0[ra as usize] = rb;
-        }
-    }
-}
-
 /// Components of the runs: a compact component id (0-based, in scan order of
 /// first voxels) for every run, and the number of components.
 fn connect(runs: &Runs, dims: [usize; 3], conn: Connectivity) -> (Vec<u32>, usize) {
     let [_, ny, nz] = dims;
     let n = runs.span.len();
-    let mut uf = UnionFind::new(n);
+    let mut uf: UnionFind<u32> = UnionFind::new(n);
     let full = conn == Connectivity::Full;
     let prev: &[(i64, i64)] = if full {
         &[(-1, 0), (-1, -1), (0, -1), (1, -1)]
@@ -167,12 +142,12 @@ fn connect(runs: &Runs, dims: [usize; 3], conn: Connectivity) -> (Vec<u32>, usiz
             }
         }
     }
-    // Roots are the smallest run index of their component, so numbering roots
-    // in run order numbers components in scan order.
+    // The first run of each component in run order numbers it, so components
+    // are numbered in scan order whichever run the union-find made the root.
     let mut id = vec![u32::MAX; n];
     let mut next = 0u32;
     for r in 0..n {
-        let root = uf.find(r as u32) as usize;
+        let root = uf.find_mut(r as u32) as usize;
         if id[root] == u32::MAX {
             id[root] = next;
             next += 1;

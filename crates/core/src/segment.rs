@@ -488,40 +488,26 @@ mod tests {
         )
         .unwrap();
         assert_eq!(k.get(12, 12, 5), 2);
-        assert!(
-            segment(
-                &v,
-                &SegmentParams {
-                    classes: 3,
-                    ..Default::default()
-                },
-                &Cancel::new(),
-            )
-            .is_err()
-        );
-        assert!(
-            segment(
-                &v,
-                &SegmentParams {
-                    method: SegmentMethod::KMeans,
-                    classes: 7,
-                    ..Default::default()
-                },
-                &Cancel::new(),
-            )
-            .is_err()
-        );
-        assert!(
-            segment(
-                &v,
-                &SegmentParams {
-                    smooth_sigma: -1.0,
-                    ..Default::default()
-                },
-                &Cancel::new(),
-            )
-            .is_err()
-        );
+        // Refused: three classes of the default method, seven k-means classes,
+        // a negative smoothing.
+        let refused = [
+            SegmentParams {
+                classes: 3,
+                ..Default::default()
+            },
+            SegmentParams {
+                method: SegmentMethod::KMeans,
+                classes: 7,
+                ..Default::default()
+            },
+            SegmentParams {
+                smooth_sigma: -1.0,
+                ..Default::default()
+            },
+        ];
+        for p in &refused {
+            assert!(segment(&v, p, &Cancel::new()).is_err(), "{p:?}");
+        }
         assert!(SegmentMethod::parse("watershed").is_err());
         assert_eq!(
             SegmentMethod::parse("multi-otsu").unwrap(),

@@ -104,3 +104,58 @@ impl fmt::Display for SliceRef {
         write!(f, "{}={}", self.axis, self.index)
     }
 }
+
+/// The sparse selection of slices between `first` and `last` (both
+/// included): every `n`-th slice counted from `first` (`first`, `first + n`,
+/// `first + 2n`, …) plus `last`, ascending and without repeats.
+///
+/// `n` is the spacing of the selected slices: `n = 1` selects every slice,
+/// `n = 3` selects one and skips two. (Where a count of *skipped* slices `k`
+/// is given, as in the interpolation study, `n = k + 1`.) `n = 0` is taken
+/// as 1. Empty when `first > last`. This is how a sparse tracing is
+/// simulated everywhere (contour extraction, the study, the campaign).
+pub fn every_nth_slice(first: usize, last: usize, n: usize) -> Vec<usize> {
+    if first > last {
+        return Vec::new();
+    }
+    let mut keep: Vec<usize> = (first..=last).step_by(n.max(1)).collect();
+    if keep.last() != Some(&last) {
+        keep.push(last);
+    }
+    keep
+}
+
+#[cfg(test)]
+mod tests {
+    use super::every_nth_slice;
+    use proptest::prelude::*;
+
+    #[test]
+    fn every_nth_examples() {
+        assert_eq!(every_nth_slice(4, 9, 3), vec![4, 7, 9]);
+        assert_eq!(every_nth_slice(4, 7, 3), vec![4, 7]);
+        assert_eq!(every_nth_slice(2, 2, 5), vec![2]);
+        assert_eq!(every_nth_slice(1, 3, 1), vec![1, 2, 3]);
+        assert_eq!(every_nth_slice(1, 3, 0), vec![1, 2, 3]);
+        assert_eq!(every_nth_slice(5, 4, 2), Vec::<usize>::new());
+    }
+
+    proptest! {
+        #[test]
+        fn first_last_sorted_unique_spaced(first in 0usize..200, len in 0usize..200, n in 1usize..40) {
+            let last = first + len;
+            let s = every_nth_slice(first, last, n);
+            prop_assert_eq!(s.first(), Some(&first));
+            prop_assert_eq!(s.last(), Some(&last));
+            for w in s.windows(2) {
+                prop_assert!(w[0] < w[1]);
+                prop_assert!(w[1] - w[0] <= n);
+            }
+            // Every n-th from the first is there.
+            for k in (first..=last).step_by(n) {
+                prop_assert!(s.contains(&k));
+            }
+            prop_assert!(s.len() <= len / n + 2);
+        }
+    }
+}

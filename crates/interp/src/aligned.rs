@@ -19,7 +19,7 @@
 //!    slices, an unmatched branch of a split) is capped by a sphere through
 //!    its cross-section (equivalent radius `r`) with its centre `c` past the
 //!    drawn slice: the cross-section shrinks (or first widens, for `c > 0`)
-//!    by the ratio `ρ(z) / r`, `ρ(z)² = r² + 2cz − z²` ([`Cap`]), applied to
+//!    by the ratio `ρ(z) / r`, `ρ(z)² = r² + 2cz − z²` (`Cap`), applied to
 //!    the signed distance measured from the pixel edges, so that the cap
 //!    vanishes where `ρ` does whatever the cross-section's shape. When the
 //!    object shows on the previous drawn slice too, the sphere through both
@@ -50,6 +50,8 @@ use crate::slices::{Plane, assemble};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::edt::squared_edt_2d_f32;
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::{UnionFind, flood_2d};
 use rayon::prelude::*;
 
 /// Shape-based interpolation of matched, aligned objects with caps.
@@ -213,75 +215,43 @@ fn sample_full(d: &[f32], plane: &Plane, pu: f64, pv: f64) -> f32 {
     top * (1.0 - fy) + bot * fy
 }
 
-/// 8-connected components of a row-major mask.
+/// 8-connected components of a row-major mask with their area, centroid
+/// and bounding box (pixel sums are exact, so their order does not matter).
 fn components(mask: &[bool], w: usize, h: usize) -> (Vec<u32>, Vec<Component>) {
-    let mut ids = vec![0u32; w * h];
-    let mut comps = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..w * h {
-        if !mask[start] || ids[start] != 0 {
-            continue;
+    let mut acc: Vec<(usize, f64, f64, [usize; 4])> = Vec::new();
+    let ids = flood_2d(mask, w, h, Connectivity::Full, |r, p| {
+        if r as usize == acc.len() {
+            acc.push((0, 0.0, 0.0, [usize::MAX, usize::MAX, 0, 0]));
         }
-        let id = comps.len() as u32 + 1;
-        ids[start] = id;
-        stack.push(start);
-        let (mut n, mut su, mut sv) = (0usize, 0f64, 0f64);
-        let mut bb = [usize::MAX, usize::MAX, 0, 0];
-        while let Some(p) = stack.pop() {
-            let (u, v) = (p % w, p / w);
-            n += 1;
-            su += u as f64;
-            sv += v as f64;
-            bb = [
-                bb[0].min(u),
-                bb[1].min(v),
-                bb[2].max(u + 1),
-                bb[3].max(v + 1),
-            ];
-            for dv in -1i64..=1 {
-                for du in -1i64..=1 {
-                    let (nu, nv) = (u as i64 + du, v as i64 + dv);
-                    if nu < 0 || nv < 0 || nu >= w as i64 || nv >= h as i64 {
-                        continue;
-                    }
-                    let q = nu as usize + w * nv as usize;
-                    if mask[q] && ids[q] == 0 {
-                        ids[q] = id;
-                        stack.push(q);
-                    }
-                }
-            }
-        }
-        comps.push(Component {
+        let (n, su, sv, bb) = &mut acc[r as usize];
+        let (u, v) = (p % w, p / w);
+        *n += 1;
+        *su += u as f64;
+        *sv += v as f64;
+        *bb = [
+            bb[0].min(u),
+            bb[1].min(v),
+            bb[2].max(u + 1),
+            bb[3].max(v + 1),
+        ];
+    });
+    let comps = acc
+        .into_iter()
+        .map(|(n, su, sv, bbox)| Component {
             area: n,
             centroid: [su / n as f64, sv / n as f64],
-            bbox: bb,
-        });
-    }
+            bbox,
+        })
+        .collect();
     (ids, comps)
-}
-
-/// Minimal union-find over component indices.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
 }
 
 /// Groups of matched components of A (indices `0..na`) and B (`na..`):
 /// `(a_components, b_components)` per group.
 fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usize>)> {
     let (na, nb) = (a.comps.len(), b.comps.len());
-    let mut parent: Vec<usize> = (0..na + nb).collect();
+    let mut uf: UnionFind<usize> = UnionFind::new(na + nb);
     let mut linked = vec![false; na + nb];
-    let union = |p: &mut Vec<usize>, x: usize, y: usize| {
-        let (rx, ry) = (find(p, x), find(p, y));
-        if rx != ry {
-            p[rx] = ry;
-        }
-    };
     // Overlap.
     let mut pairs: Vec<(u32, u32)> = a
         .ids
@@ -293,7 +263,7 @@ fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usi
     pairs.sort_unstable();
     pairs.dedup();
     for &(x, y) in &pairs {
-        union(&mut parent, x as usize, na + y as usize);
+        uf.union(x as usize, na + y as usize);
         linked[x as usize] = true;
         linked[na + y as usize] = true;
     }
@@ -318,12 +288,12 @@ fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usi
             && nearest(&b.comps[j], &free_a, &a.comps) == Some(i)
             && dist(&a.comps[i], &b.comps[j]) < 2.0 * (radius(&a.comps[i]) + radius(&b.comps[j]))
         {
-            union(&mut parent, i, na + j);
+            uf.union(i, na + j);
         }
     }
     let mut groups: Vec<(usize, Vec<usize>, Vec<usize>)> = Vec::new();
     for x in 0..na + nb {
-        let r = find(&mut parent, x);
+        let r = uf.find_mut(x);
         let g = match groups.iter().position(|g| g.0 == r) {
             Some(g) => g,
             None => {

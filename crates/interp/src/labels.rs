@@ -9,7 +9,9 @@
 //! label's own mask. Holes holding background stay holes. Painting in
 //! ascending order then reproduces every drawn slice exactly.
 use crate::{InterpError, Interpolator, SparseMask};
-use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::whole_structure;
+use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
 
 /// Interpolate every label of `sparse` from its drawn slices along `axis`.
@@ -120,7 +122,8 @@ pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u1
 }
 
 /// The traced mask of `label` on the drawn slices (other slices empty): the
-/// label's voxels plus the holes that are filled entirely by higher labels.
+/// whole structure of the label on each, as a 2D image with 8-connected
+/// holes ([`interslice_core::regions::whole_structure`]).
 pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Mask {
     let mut m: Mask = Volume::zeros(sparse.geometry().clone());
     let (w, h) = sparse.slice_shape(axis);
@@ -128,63 +131,16 @@ pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16
         .par_iter()
         .map(|&d| {
             let s = sparse.slice(axis, d).expect("validated drawn index");
-            fill_nested_holes(&s, w, h, label)
+            let g = Geometry::new([w, h, 1], [1.0; 3], sparse.geometry().unit)
+                .expect("slice dims of a valid volume");
+            let slice = Volume::from_vec(g, s).expect("slice size");
+            whole_structure(&slice, label, Connectivity::Full)
+                .into_parts()
+                .1
         })
         .collect();
     for (&d, f) in drawn.iter().zip(&filled) {
         m.set_slice(axis, d, f).expect("slice shape matches");
     }
     m
-}
-
-/// `labels == label`, with every hole (8-connected component of the rest not
-/// touching the slice border) whose pixels all carry a higher label filled in.
-pub fn fill_nested_holes(labels: &[u16], w: usize, h: usize, label: u16) -> Vec<bool> {
-    let mut mask: Vec<bool> = labels.iter().map(|&v| v == label).collect();
-    if !labels.iter().any(|&v| v > label) {
-        return mask;
-    }
-    // 0 = unvisited, 1 = visited.
-    let mut seen = vec![false; w * h];
-    let mut stack = Vec::new();
-    let mut comp = Vec::new();
-    for start in 0..w * h {
-        if mask[start] || seen[start] {
-            continue;
-        }
-        comp.clear();
-        stack.push(start);
-        seen[start] = true;
-        let mut touches_border = false;
-        let mut all_higher = true;
-        while let Some(p) = stack.pop() {
-            comp.push(p);
-            let (u, v) = (p % w, p / w);
-            if u == 0 || v == 0 || u + 1 == w || v + 1 == h {
-                touches_border = true;
-            }
-            if labels[p] <= label {
-                all_higher = false;
-            }
-            for dv in -1i64..=1 {
-                for du in -1i64..=1 {
-                    let (nu, nv) = (u as i64 + du, v as i64 + dv);
-                    if nu < 0 || nv < 0 || nu >= w as i64 || nv >= h as i64 {
-                        continue;
-                    }
-                    let q = nu as usize + w * nv as usize;
-                    if !mask[q] && !seen[q] {
-                        seen[q] = true;
-                        stack.push(q);
-                    }
-                }
-            }
-        }
-        if !touches_border && all_higher {
-            for &p in &comp {
-                mask[p] = true;
-            }
-        }
-    }
-    mask
 }

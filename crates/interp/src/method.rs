@@ -1,4 +1,5 @@
 //! The interpolator trait shared by every method.
+use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, Mask, Volume};
 use thiserror::Error;
 
@@ -47,6 +48,14 @@ pub trait Interpolator: Send + Sync {
         let m = self.interpolate(input)?;
         let c = crate::confidence::shape_confidence(&m, &input, 1.0);
         Ok((m, c))
+    }
+    /// The surface a mesh-based method builds from the drawn slices, in
+    /// physical (x, y, z), before the drawn slices are restored (see
+    /// [`crate::mesh`]); `Ok(None)` for the methods that work on voxels, whose
+    /// surface is that of their result ([`crate::mesh::mask_surface`]).
+    fn surface_mesh(&self, input: SparseMask<'_>) -> Result<Option<TriMesh>, InterpError> {
+        let _ = input;
+        Ok(None)
     }
 }
 

@@ -19,13 +19,11 @@ pub fn drawn_for_skip(mask: &Mask, axis: Axis, k: usize) -> Option<Vec<usize>> {
     (last > first).then(|| drawn_for(first, last, k))
 }
 
-/// The drawn slices of a run: `first`, every `(k + 1)`-th after it, and `last`.
+/// The drawn slices of a run for `k` skipped slices: `first`, every
+/// `(k + 1)`-th after it, and `last`
+/// ([`interslice_core::slice::every_nth_slice`] with `n = k + 1`).
 pub fn drawn_for(first: usize, last: usize, k: usize) -> Vec<usize> {
-    let mut d: Vec<usize> = (first..=last).step_by(k + 1).collect();
-    if d.last() != Some(&last) {
-        d.push(last);
-    }
-    d
+    interslice_core::slice::every_nth_slice(first, last, k + 1)
 }
 
 /// `mask` (a mask or a label volume) with every slice but `drawn` erased.

@@ -1,9 +1,10 @@
 //! The four mesh-based methods of the original system: accuracy floors on an
 //! ellipsoid and a two-lobed nucleus traced on every 5th slice, the
 //! invariants along every axis with anisotropic spacing, and their surfaces.
+use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, Mask};
-use interslice_interp::mesh::{MESH_METHODS, mesh_methods, surface};
-use interslice_interp::{Interpolator, SparseMask};
+use interslice_interp::mesh::mesh_methods;
+use interslice_interp::{InterpError, Interpolator, SparseMask, by_name};
 
 mod common;
 use common::{dice, every, in_ellipsoid, shape, sparse};
@@ -31,6 +32,19 @@ fn method(name: &str) -> Box<dyn Interpolator> {
         .into_iter()
         .find(|m| m.name() == name)
         .expect("mesh method")
+}
+
+/// The surface of the method called `name`; an error for an unknown method
+/// or one that builds no surface.
+fn surface(name: &str, input: SparseMask<'_>) -> Result<TriMesh, InterpError> {
+    by_name(name)?
+        .surface_mesh(input)?
+        .ok_or_else(|| InterpError::Input(format!("method '{name}' builds no surface")))
+}
+
+/// The names of the mesh methods, in the order of the original system.
+fn mesh_names() -> Vec<&'static str> {
+    mesh_methods().iter().map(|m| m.name()).collect()
 }
 
 fn run(name: &str, full: &Mask, axis: Axis, step: usize) -> (Mask, Vec<usize>) {
@@ -109,7 +123,7 @@ fn drawn_slices_exact_and_empty_slices_empty_on_every_axis() {
         in_ellipsoid(p, [9.0, 13.0, 17.0], [7.0, 9.0, 9.0])
     });
     for axis in Axis::ALL {
-        for name in MESH_METHODS {
+        for name in mesh_names() {
             let (out, drawn) = run(name, &full, axis, 4);
             let mut empty_seen = false;
             for &d in &drawn {
@@ -137,7 +151,7 @@ fn two_far_apart_nucleoli_stay_two_objects() {
         in_ellipsoid(p, [12.0, 20.0, 20.0], [6.0, 6.0, 8.0])
             || in_ellipsoid(p, [36.0, 20.0, 20.0], [6.0, 7.0, 8.0])
     });
-    for name in MESH_METHODS {
+    for name in mesh_names() {
         let (out, _) = run(name, &full, Axis::Z, 3);
         // Nothing in the gap between the two nucleoli.
         for k in 0..40 {
@@ -245,7 +259,7 @@ mod random_shapes {
             let drawn = every(full.slice_count(axis), step);
             let sp = sparse(&full, axis, &drawn);
             let input = SparseMask { mask: &sp, axis, drawn: &drawn };
-            for name in MESH_METHODS {
+            for name in mesh_names() {
                 let out = method(name).interpolate(input).unwrap();
                 for &d in &drawn {
                     prop_assert_eq!(out.slice(axis, d).unwrap(), full.slice(axis, d).unwrap(),

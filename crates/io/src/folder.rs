@@ -19,11 +19,10 @@
 //! `slice_*.png` files.
 use crate::header::num;
 use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want, try_vec};
-use crate::planes::{Plane, Stack};
+use crate::planes::{Plane, Stack, parse_list, unknown_geometry};
 use crate::raw::{self, RawType};
 use crate::{Format, IoError};
 use crate::{source, tiff_stack};
-use interslice_core::geometry::IDENTITY_DIRECTION;
 use interslice_core::{AnyVolume, Geometry, LengthUnit};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -269,23 +268,9 @@ fn tiff_header(path: &Path, first: bool) -> Result<TiffSlice, IoError> {
     Ok((d, SliceHeader { w, h, t }, g, len))
 }
 
-fn parse_list<const N: usize>(s: &str) -> Option<[f64; N]> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse().ok())
-        .collect::<Option<_>>()?;
-    v.try_into().ok()
-}
-
 /// Geometry (dims left 1) from the `interslice` text chunk.
 fn geometry_from_text(path: &Path, text: Option<&str>) -> Result<Geometry, IoError> {
-    let mut g = Geometry {
-        dims: [1; 3],
-        spacing: [1.0; 3],
-        unit: LengthUnit::Unknown,
-        origin: [0.0; 3],
-        direction: IDENTITY_DIRECTION,
-    };
+    let mut g = unknown_geometry();
     let Some(text) = text else {
         return Ok(g);
     };

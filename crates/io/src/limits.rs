@@ -3,7 +3,7 @@
 //! header says about the volume.
 //!
 //! Every allocation whose size comes from a file goes through these checks
-//! or through [`try_vec`], so a lying header gives an error, never an
+//! or through `try_vec`, so a lying header gives an error, never an
 //! allocation failure (which aborts the process).
 use crate::raw::RawType;
 use crate::{Format, IoError};

@@ -334,7 +334,7 @@ fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> Str
 
 /// Write a `.mha` (zlib data attached) or `.mhd` (+ uncompressed `.raw`) file.
 pub fn write(path: &Path, v: &AnyVolume, attached: bool) -> Result<(), IoError> {
-    let data = raw::encode_le(v);
+    let data = v.to_le_bytes();
     if attached {
         let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
         z.write_all(&data).map_err(|e| IoError::write(path, e))?;

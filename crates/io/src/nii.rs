@@ -580,7 +580,7 @@ pub fn write(path: &Path, v: &AnyVolume, gz: bool) -> Result<(), IoError> {
         ));
     }
     let head = header_bytes(g, RawType::of(v));
-    let data = raw::encode_le(v);
+    let data = v.to_le_bytes();
     raw::write_atomic(path, |w| {
         if gz {
             let mut e = flate2::write::GzEncoder::new(w, flate2::Compression::fast());

@@ -738,7 +738,7 @@ pub fn write_with_keys(
         head.push_str(&format!("{k}:={val}\n"));
     }
     head.push('\n');
-    let data = raw::encode_le(v);
+    let data = v.to_le_bytes();
     raw::write_atomic(path, |w| {
         w.write_all(head.as_bytes())?;
         let mut e = flate2::write::GzEncoder::new(w, flate2::Compression::fast());

@@ -1,6 +1,7 @@
 //! Stacks of 2D gray images (TIFF pages, PNG/TIFF slice files) assembled
 //! into a volume, with checks that every plane has the same size and type.
 use crate::IoError;
+use interslice_core::geometry::IDENTITY_DIRECTION;
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
 use std::path::Path;
 
@@ -122,6 +123,28 @@ impl Stack {
             Plane::I16(d) => AnyVolume::I16(Volume::from_vec(geometry, d).map_err(bad)?),
             Plane::F32(d) => AnyVolume::F32(Volume::from_vec(geometry, d).map_err(bad)?),
         })
+    }
+}
+
+/// `N` comma-separated numbers (as in `spacing=1,1,2`); `None` for any
+/// other count or a non-number.
+pub(crate) fn parse_list<const N: usize>(s: &str) -> Option<[f64; N]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse().ok())
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
+/// The geometry of a plane file before its metadata is read: dims 1, unit
+/// spacing of unknown unit, origin 0, identity direction.
+pub(crate) fn unknown_geometry() -> Geometry {
+    Geometry {
+        dims: [1; 3],
+        spacing: [1.0; 3],
+        unit: LengthUnit::Unknown,
+        origin: [0.0; 3],
+        direction: IDENTITY_DIRECTION,
     }
 }
 

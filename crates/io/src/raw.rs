@@ -275,31 +275,6 @@ pub fn decode_volume(
 /// The largest whole number every f32 holds exactly (2^24).
 const F32_EXACT_INT: i64 = 1 << 24;
 
-/// The voxels of a volume as little-endian bytes, x-fastest.
-pub fn encode_le(v: &AnyVolume) -> Vec<u8> {
-    match v {
-        AnyVolume::U8(v) => v.data().to_vec(),
-        AnyVolume::U16(v) => v
-            .data()
-            .par_iter()
-            .with_min_len(1 << 14)
-            .flat_map_iter(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::I16(v) => v
-            .data()
-            .par_iter()
-            .with_min_len(1 << 14)
-            .flat_map_iter(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::F32(v) => v
-            .data()
-            .par_iter()
-            .with_min_len(1 << 14)
-            .flat_map_iter(|x| x.to_le_bytes())
-            .collect(),
-    }
-}
-
 /// Write a file atomically: `f` writes into a temporary file in the same
 /// directory, which is renamed over `path` only when everything succeeded.
 /// On any error the temporary file is removed and `path` is untouched.

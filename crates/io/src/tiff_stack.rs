@@ -10,7 +10,9 @@
 //! keys (`interslice.origin=`, `interslice.direction=`) that ImageJ ignores.
 //! Written uncompressed (what every ImageJ version opens).
 use crate::limits::{Loaded, ReadLimits, VolumeHeader, Want};
-use crate::planes::{Plane, Stack, resolution_rational, unit_with_scale};
+use crate::planes::{
+    Plane, Stack, parse_list, resolution_rational, unit_with_scale, unknown_geometry,
+};
 use crate::raw::{self, RawType};
 use crate::source::Source;
 use crate::{Format, IoError};
@@ -193,14 +195,6 @@ fn resolution<R: Read + Seek>(
     Ok(Some(x))
 }
 
-fn parse3(s: &str) -> Option<[f64; 3]> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse().ok())
-        .collect::<Option<_>>()?;
-    v.try_into().ok()
-}
-
 /// Spacing, unit, origin and direction of the first page (dims left 1).
 /// Without an ImageJ description the file has no spacing: 1 and an unknown
 /// unit. With one, a resolution or `spacing=` that is zero, negative or
@@ -209,13 +203,7 @@ pub(crate) fn geometry_of<R: Read + Seek>(
     path: &Path,
     d: &mut Decoder<R>,
 ) -> Result<Geometry, IoError> {
-    let mut g = Geometry {
-        dims: [1; 3],
-        spacing: [1.0; 3],
-        unit: LengthUnit::Unknown,
-        origin: [0.0; 3],
-        direction: IDENTITY_DIRECTION,
-    };
+    let mut g = unknown_geometry();
     let Some(desc) = imagej_description(d) else {
         return Ok(g);
     };
@@ -244,7 +232,7 @@ pub(crate) fn geometry_of<R: Read + Seek>(
         None => g.spacing[0],
     };
     if let Some(o) = desc.get("interslice.origin") {
-        g.origin = parse3(o)
+        g.origin = parse_list::<3>(o)
             .ok_or_else(|| IoError::invalid(path, format!("bad interslice.origin={o}")))?;
     }
     if let Some(s) = desc.get("interslice.direction") {

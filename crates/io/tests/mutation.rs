@@ -295,7 +295,7 @@ fn text_headers(rng: &mut ChaCha8Rng, n: usize, canary: &Path, out: &mut Vec<Var
     let v = seed_volume();
     let nrrd = written("t.nrrd", &v);
     let mha = written("t.mha", &v);
-    let data = interslice_io::raw::encode_le(&v);
+    let data = v.to_le_bytes();
     let nhdr = "NRRD0004\ntype: unsigned short\ndimension: 3\nspace: left-posterior-superior\nsizes: 6 5 4\nspace directions: (0.5,0,0) (0,0.5,0) (0,0,1)\nendian: little\nencoding: raw\nspace origin: (0,0,0)\nbyte skip: 0\ndata file: t.raw\n";
     let mhd = "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\nCompressedData = False\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = 0 0 0\nElementSpacing = 0.5 0.5 1\nDimSize = 6 5 4\nHeaderSize = 0\nElementType = MET_USHORT\nElementDataFile = t.raw\n";
     truncations(rng, "t.nrrd", &nrrd, n / 12, out);

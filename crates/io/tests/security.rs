@@ -17,7 +17,7 @@ fn volume() -> AnyVolume {
 }
 
 fn raw_bytes() -> Vec<u8> {
-    interslice_io::raw::encode_le(&volume())
+    volume().to_le_bytes()
 }
 
 const NHDR: &str = "NRRD0004\ntype: unsigned short\ndimension: 3\nsizes: 6 5 4\nspacings: 0.5 0.5 1\nendian: little\nencoding: raw\ndata file: DATA\n";
@@ -125,7 +125,7 @@ fn negative_skips_other_than_minus_one_are_errors() {
 
 /// The voxels read from `path`, as little-endian bytes.
 fn voxels(path: &Path) -> Vec<u8> {
-    interslice_io::raw::encode_le(&read_volume(path).unwrap())
+    read_volume(path).unwrap().to_le_bytes()
 }
 
 #[test]

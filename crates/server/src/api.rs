@@ -1,6 +1,6 @@
 //! The handlers of `docs/API.md`.
 use crate::auth::{self, Auth, reader_target};
-use crate::cells::{le_bytes, safe_relative_path};
+use crate::cells::safe_relative_path;
 use crate::error::{ApiError, ApiJson, ApiPath, ApiQuery};
 use crate::groundtruth;
 use crate::{SharedState, openapi};
@@ -9,6 +9,7 @@ use axum::extract::State;
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{delete, get, post, put};
+use interslice_core::le::encode_le;
 use interslice_core::{AnyVolume, Axis, Cancel, Geometry, LabelVolume};
 use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredContour, User};
 use serde::{Deserialize, Serialize};
@@ -126,14 +127,7 @@ pub fn method_by_name(
     name: Option<&str>,
 ) -> Result<Box<dyn interslice_interp::Interpolator>, ApiError> {
     let name = name.unwrap_or(interslice_interp::DEFAULT_METHOD);
-    interslice_interp::by_name(name)
-        .or_else(|e| {
-            interslice_interp::mesh::mesh_methods()
-                .into_iter()
-                .find(|m| m.name() == name)
-                .ok_or(e)
-        })
-        .map_err(ApiError::from)
+    interslice_interp::by_name(name).map_err(ApiError::from)
 }
 
 // ------------------------------------------------------------------ methods, labels
@@ -148,22 +142,15 @@ pub struct MethodInfo {
 }
 
 async fn methods() -> Json<Vec<MethodInfo>> {
-    let mut all: Vec<MethodInfo> = interslice_interp::methods()
-        .iter()
-        .map(|m| MethodInfo {
-            name: m.name().to_string(),
-            description: m.description().to_string(),
-        })
-        .collect();
-    for m in interslice_interp::mesh::mesh_methods() {
-        if !all.iter().any(|a| a.name == m.name()) {
-            all.push(MethodInfo {
+    Json(
+        interslice_interp::methods()
+            .iter()
+            .map(|m| MethodInfo {
                 name: m.name().to_string(),
                 description: m.description().to_string(),
-            });
-        }
-    }
-    Json(all)
+            })
+            .collect(),
+    )
 }
 
 async fn labels(State(state): State<SharedState>, _a: Auth) -> Result<Response, ApiError> {
@@ -432,24 +419,12 @@ async fn slice(
         }
         AnyVolume::U16(_) if axis == Axis::Z => {
             let n = w * h;
-            le_bytes(&c.volume, n * index..n * (index + 1))
+            c.volume.le_bytes(n * index..n * (index + 1))
         }
         AnyVolume::U8(v) => v.slice(axis, index)?,
-        AnyVolume::U16(v) => v
-            .slice(axis, index)?
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::I16(v) => v
-            .slice(axis, index)?
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::F32(v) => v
-            .slice(axis, index)?
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
+        AnyVolume::U16(v) => encode_le(&v.slice(axis, index)?),
+        AnyVolume::I16(v) => encode_le(&v.slice(axis, index)?),
+        AnyVolume::F32(v) => encode_le(&v.slice(axis, index)?),
     };
     let mut resp = bytes.into_response();
     let hd = resp.headers_mut();

@@ -207,25 +207,6 @@ fn finite_range(volume: &AnyVolume) -> (f64, f64) {
     }
 }
 
-/// Little-endian bytes of voxels.
-pub fn le_bytes(v: &AnyVolume, range: std::ops::Range<usize>) -> Vec<u8> {
-    match v {
-        AnyVolume::U8(v) => v.data()[range].to_vec(),
-        AnyVolume::U16(v) => v.data()[range]
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::I16(v) => v.data()[range]
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
-        AnyVolume::F32(v) => v.data()[range]
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect(),
-    }
-}
-
 impl LoadedCell {
     /// Read a cell and compute its range, histogram and content hash.
     /// Every allocation the file's header asks for is checked by the reader
@@ -275,7 +256,7 @@ impl LoadedCell {
         let mut start = 0;
         while start < n {
             let end = (start + step).min(n);
-            h.update(&le_bytes(&volume, start..end));
+            h.update(&volume.le_bytes(start..end));
             start = end;
         }
         LoadedCell {

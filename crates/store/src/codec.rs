@@ -4,6 +4,7 @@ use crate::{Result, StoreError};
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
 use flate2::write::DeflateEncoder;
+use interslice_core::le::{decode_le, encode_le};
 use std::io::{Read, Write};
 
 fn deflate(bytes: &[u8]) -> Vec<u8> {
@@ -49,17 +50,13 @@ pub fn decode_mask(blob: &[u8], len: usize) -> Result<Vec<bool>> {
 
 /// Little-endian u16 and deflate.
 pub fn encode_labels(labels: &[u16]) -> Vec<u8> {
-    let bytes: Vec<u8> = labels.iter().flat_map(|v| v.to_le_bytes()).collect();
-    deflate(&bytes)
+    deflate(&encode_le(labels))
 }
 
 /// Inverse of [`encode_labels`] for `len` voxels.
 pub fn decode_labels(blob: &[u8], len: usize) -> Result<Vec<u16>> {
     let bytes = inflate(blob, len * 2)?;
-    Ok(bytes
-        .chunks_exact(2)
-        .map(|c| u16::from_le_bytes([c[0], c[1]]))
-        .collect())
+    decode_le(&bytes).ok_or_else(|| StoreError::Corrupt("odd label byte count".into()))
 }
 
 #[cfg(test)]

@@ -187,11 +187,7 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
 /// The slices a tracer draws between `first` and `last`: every `skip + 1`-th
 /// counted from `first`, and `last`.
 fn drawn_slices(first: usize, last: usize, skip: usize) -> Vec<usize> {
-    let mut v: Vec<usize> = (first..=last).step_by(skip + 1).collect();
-    if v.last() != Some(&last) {
-        v.push(last);
-    }
-    v
+    interslice_core::slice::every_nth_slice(first, last, skip + 1)
 }
 
 /// Draw one tracer's contours of `labels` on one cell; returns how many.

@@ -121,11 +121,7 @@ fn sparse_indices(non_empty: &[usize], every: usize) -> Vec<usize> {
     let (Some(&first), Some(&last)) = (non_empty.first(), non_empty.last()) else {
         return Vec::new();
     };
-    let mut keep: Vec<usize> = (first..=last).step_by(every).collect();
-    if keep.last() != Some(&last) {
-        keep.push(last);
-    }
-    keep
+    interslice_core::slice::every_nth_slice(first, last, every)
 }
 
 fn extract(input: &Path, out: &Path, axis: Axis, every: usize, author: &str) -> anyhow::Result<()> {

@@ -20,7 +20,7 @@ use anyhow::{Context, Result, bail};
 use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, LabelVolume, Mask};
 use interslice_interp::labels::traced_mask;
-use interslice_interp::mesh::{MESH_METHODS, mask_surface, surface};
+use interslice_interp::mesh::mask_surface;
 use interslice_interp::{SparseMask, by_name};
 use interslice_io::mesh::{MeshFormat, world_transform, write_mesh_as};
 use std::path::PathBuf;
@@ -138,10 +138,10 @@ fn method_surface(labels: &LabelVolume, name: &str, a: &Args) -> Result<TriMesh>
             axis: a.axis,
             drawn: &drawn,
         };
-        let m = if MESH_METHODS.contains(&method.name()) {
-            surface(method.name(), input)
-        } else {
-            method.interpolate(input).map(|r| mask_surface(&r))
+        let m = match method.surface_mesh(input) {
+            Ok(Some(m)) => Ok(m),
+            Ok(None) => method.interpolate(input).map(|r| mask_surface(&r)),
+            Err(e) => Err(e),
         }
         .with_context(|| format!("method {} on label {l}", method.name()))?;
         out.append(&m);

@@ -22,7 +22,8 @@
 //! cell to `--consensus-dir` (default `OUT/consensus/`).
 use anyhow::{Context, Result, bail};
 use interslice_core::metrics::overlap_masks;
-use interslice_core::morph::{Connectivity, fill_holes};
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::whole_structure;
 use interslice_core::staple::{StapleParams, majority_vote};
 use interslice_core::{Geometry, LabelVolume, Mask};
 use interslice_server::consensus::{LabelRaters, consensus_of, rater_masks};
@@ -135,11 +136,10 @@ fn truth_of(dir: &Path, cell: &str) -> Result<Option<LabelVolume>> {
     }
 }
 
-/// The whole structure of `label` in a painted label volume: the label with
-/// its holes filled, so a nucleus includes its nucleoli and a cell its
-/// nucleus, as a tracer outlines them.
+/// The whole structure of `label` in a painted label volume
+/// ([`interslice_core::regions::whole_structure`]).
 fn structure(truth: &LabelVolume, label: u16) -> Mask {
-    fill_holes(&truth.mask_of(label), Connectivity::Face)
+    whole_structure(truth, label, Connectivity::Face)
 }
 
 /// Measure one label of one cell.

@@ -190,6 +190,19 @@ impl Histogram {
         self.counts.iter().sum()
     }
 
+    /// The total weight (voxel count, as f64) and the weighted sum of the
+    /// bin centres, summed in bin order (the moments Otsu and ISODATA split).
+    pub fn weight_and_sum(&self) -> (f64, f64) {
+        let w: f64 = self.counts.iter().map(|&c| c as f64).sum();
+        let s: f64 = self
+            .counts
+            .iter()
+            .zip(&self.centres)
+            .map(|(&c, &x)| c as f64 * x)
+            .sum();
+        (w, s)
+    }
+
     /// Number of bins that hold at least one voxel.
     pub fn nonempty_bins(&self) -> usize {
         self.counts.iter().filter(|&&c| c > 0).count()

@@ -14,13 +14,7 @@ pub fn isodata(h: &Histogram) -> Result<f64, ThresholdError> {
     if n == 1 || h.is_constant() {
         return Ok(h.min);
     }
-    let total_w: f64 = h.counts.iter().map(|&c| c as f64).sum();
-    let total_s: f64 = h
-        .counts
-        .iter()
-        .zip(&h.centres)
-        .map(|(&c, &x)| c as f64 * x)
-        .sum();
+    let (total_w, total_s) = h.weight_and_sum();
     let width = h.centres[1] - h.centres[0];
     let (mut wl, mut sl) = (0.0f64, 0.0f64);
     for t in 0..n - 1 {

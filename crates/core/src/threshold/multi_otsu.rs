@@ -10,7 +10,7 @@ use super::partition::{Prefix, optimal_partition};
 use super::{Histogram, ThresholdError, otsu};
 
 /// The `classes - 1` thresholds of multi-class Otsu (`classes` in 2..=16).
-/// Two classes give exactly [`otsu`]. Errs when fewer bins than classes hold voxels.
+/// Two classes give exactly [`otsu()`](fn@super::otsu). Errs when fewer bins than classes hold voxels.
 pub fn multi_otsu(h: &Histogram, classes: usize) -> Result<Vec<f64>, ThresholdError> {
     if !(2..=16).contains(&classes) {
         return Err(ThresholdError::Invalid(format!(

@@ -15,13 +15,7 @@ pub fn otsu_bin(h: &Histogram) -> Option<usize> {
         return None;
     }
     let n = h.counts.len();
-    let total_w: f64 = h.counts.iter().map(|&c| c as f64).sum();
-    let total_s: f64 = h
-        .counts
-        .iter()
-        .zip(&h.centres)
-        .map(|(&c, &x)| c as f64 * x)
-        .sum();
+    let (total_w, total_s) = h.weight_and_sum();
     let mut w1 = 0.0f64;
     let mut s1 = 0.0f64;
     let mut best = (f64::NEG_INFINITY, 0usize);

@@ -3,7 +3,7 @@
 //! when the tail left of the peak is the shorter one, the line runs from the
 //! peak to the far end of the longer tail taken at height 0, and the bin
 //! farthest below the line is the threshold. Kept as a cross-check of
-//! [`super::rosin`], which it equals on right-tailed histograms.
+//! [`rosin()`](fn@super::rosin), which it equals on right-tailed histograms.
 use super::{Histogram, ThresholdError};
 
 /// The triangle threshold of `h` (foreground `v > t`); a constant volume

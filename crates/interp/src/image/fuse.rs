@@ -20,6 +20,8 @@
 //! another object is dropped, so objects separate in the prior stay separate.
 use crate::image::model::IntensityModel;
 use crate::slices::Plane;
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::{flood_2d, neighbours_2d};
 use std::collections::VecDeque;
 
 /// Fusion parameters chosen by leave-one-out.
@@ -144,28 +146,11 @@ fn smooth(z: &mut [f32], phi: &[f32], image: &[f32], plane: &Plane, b: f32, lamb
 fn separate(phi: &[f32], z: &[f32], plane: &Plane, b: f32) -> Vec<bool> {
     let (w, h) = (plane.width, plane.height);
     // Objects of the prior (8-connected) grown breadth-first through the band.
-    let mut region = vec![0u32; w * h];
+    let prior: Vec<bool> = phi.iter().map(|&p| p < 0.0).collect();
     let mut queue = VecDeque::new();
-    let mut next_id = 0u32;
-    for start in 0..w * h {
-        if phi[start] >= 0.0 || region[start] != 0 {
-            continue;
-        }
-        next_id += 1;
-        region[start] = next_id;
-        let mut stack = vec![start];
-        while let Some(i) = stack.pop() {
-            queue.push_back(i);
-            for j in neighbours8(i, w, h) {
-                if phi[j] < 0.0 && region[j] == 0 {
-                    region[j] = next_id;
-                    stack.push(j);
-                }
-            }
-        }
-    }
+    let mut region = flood_2d(&prior, w, h, Connectivity::Full, |_, i| queue.push_back(i));
     while let Some(i) = queue.pop_front() {
-        for j in neighbours8(i, w, h) {
+        for j in neighbours_2d(i, w, h, Connectivity::Full) {
             if region[j] == 0 && phi[j] <= b {
                 region[j] = region[i];
                 queue.push_back(j);
@@ -181,22 +166,7 @@ fn separate(phi: &[f32], z: &[f32], plane: &Plane, b: f32) -> Vec<bool> {
             if phi[i] < 0.0 {
                 return true;
             }
-            !neighbours8(i, w, h).any(|j| inside[j] && region[j] != region[i])
+            !neighbours_2d(i, w, h, Connectivity::Full).any(|j| inside[j] && region[j] != region[i])
         })
         .collect()
-}
-
-/// The 8-neighbours of pixel `i` inside a `w × h` slice.
-fn neighbours8(i: usize, w: usize, h: usize) -> impl Iterator<Item = usize> {
-    let (u, v) = ((i % w) as i64, (i / w) as i64);
-    (-1i64..=1)
-        .flat_map(move |dv| (-1i64..=1).map(move |du| (du, dv)))
-        .filter(move |&(du, dv)| {
-            (du, dv) != (0, 0)
-                && u + du >= 0
-                && v + dv >= 0
-                && u + du < w as i64
-                && v + dv < h as i64
-        })
-        .map(move |(du, dv)| (u + du) as usize + w * (v + dv) as usize)
 }

@@ -8,7 +8,7 @@
 //! 2. **How the boundary sits on the image.** The intensities just inside
 //!    and just outside the tracing on the drawn slices give a log-likelihood
 //!    ratio per intensity ([`model::IntensityModel`]).
-//! 3. **Fusion** per skipped slice ([`fuse`]): prior logit plus weighted
+//! 3. **Fusion** per skipped slice ([`fuse`](mod@fuse)): prior logit plus weighted
 //!    likelihood, smoothed along image edges (a random-walker-like
 //!    regularisation, Grady 2006), in a band around the prior, objects kept
 //!    apart. This is the idea of Biomedisa's "smart interpolation" (Lösel et

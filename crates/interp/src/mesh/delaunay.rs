@@ -24,10 +24,12 @@
 //! are dropped, and they leave holes and notches: the original study found
 //! that Delaunay left holes, which this reproduces. Points are resampled so
 //! that at most [`MAX_POINTS`] are tetrahedralised.
-use super::{Frame, finish, mean_gap, slice_contours};
+use super::{Frame, mean_gap, slice_contours, voxelise_surface};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::mesh::TriMesh;
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::{UnionFind, label_2d};
 use rayon::prelude::*;
 use robust::{Coord3D, insphere, orient3d};
 use std::collections::HashMap;
@@ -469,7 +471,7 @@ impl ObjectPoints {
                     .mask
                     .slice(input.axis, d)
                     .expect("validated drawn index");
-                let (labels, sizes) = regions_4(&buf, w, h);
+                let (labels, sizes) = label_2d(&buf, w, h, Connectivity::Face);
                 let contours = slice_contours(&buf, d, frame, step)
                     .into_iter()
                     .map(|(px, pts)| (labels[px[0] + w * px[1]].max(1) - 1, pts))
@@ -487,7 +489,7 @@ impl ObjectPoints {
             offset.push(total);
             total += s.sizes.len() as u32;
         }
-        let mut parent: Vec<u32> = (0..total).collect();
+        let mut uf: UnionFind<u32> = UnionFind::new(total as usize);
         for i in 1..per_slice.len() {
             let (a, b) = (&per_slice[i - 1], &per_slice[i]);
             if a.sizes.is_empty() || b.sizes.is_empty() {
@@ -495,11 +497,7 @@ impl ObjectPoints {
             }
             for (&la, &lb) in a.labels.iter().zip(&b.labels) {
                 if la > 0 && lb > 0 {
-                    let ra = find(&mut parent, offset[i - 1] + la - 1);
-                    let rb = find(&mut parent, offset[i] + lb - 1);
-                    if ra != rb {
-                        parent[ra as usize] = rb;
-                    }
+                    uf.union(offset[i - 1] + la - 1, offset[i] + lb - 1);
                 }
             }
         }
@@ -514,7 +512,7 @@ impl ObjectPoints {
         let mut object = Vec::new();
         for (i, s) in per_slice.into_iter().enumerate() {
             for (comp, pts) in s.contours {
-                let o = find(&mut parent, offset[i] + comp);
+                let o = uf.find_mut(offset[i] + comp);
                 object.extend(std::iter::repeat_n(o, pts.len()));
                 points.extend(pts);
             }
@@ -533,54 +531,6 @@ struct SliceRegions {
     labels: Vec<u32>,
     sizes: Vec<usize>,
     contours: Vec<(u32, Vec<[f64; 3]>)>,
-}
-
-/// 4-connected regions of a `w x h` mask: labels (0 = background, region
-/// `r` labelled `r + 1`) and region sizes.
-fn regions_4(mask: &[bool], w: usize, h: usize) -> (Vec<u32>, Vec<usize>) {
-    let mut labels = vec![0u32; mask.len()];
-    let mut sizes = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..mask.len() {
-        if !mask[start] || labels[start] != 0 {
-            continue;
-        }
-        sizes.push(0usize);
-        let l = sizes.len() as u32;
-        labels[start] = l;
-        stack.push(start);
-        while let Some(p) = stack.pop() {
-            sizes[l as usize - 1] += 1;
-            let (u, v) = (p % w, p / w);
-            let mut visit = |q: usize| {
-                if mask[q] && labels[q] == 0 {
-                    labels[q] = l;
-                    stack.push(q);
-                }
-            };
-            if u > 0 {
-                visit(p - 1);
-            }
-            if u + 1 < w {
-                visit(p + 1);
-            }
-            if v > 0 {
-                visit(p - w);
-            }
-            if v + 1 < h {
-                visit(p + w);
-            }
-        }
-    }
-    (labels, sizes)
-}
-
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
 }
 
 /// Drop unused vertices and renumber.
@@ -611,9 +561,11 @@ impl Interpolator for DelaunayMethod {
         "original: alpha-filtered 3D Delaunay tetrahedralisation of the contour points, voxelised; leaves holes"
     }
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        voxelise_surface(self, input)
+    }
+    fn surface_mesh(&self, input: SparseMask<'_>) -> Result<Option<TriMesh>, InterpError> {
         input.validate()?;
-        let mesh = surface(&input);
-        finish(&input, &mesh)
+        Ok(Some(surface(&input)))
     }
 }
 

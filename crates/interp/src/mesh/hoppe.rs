@@ -38,10 +38,13 @@
 //! neighbours then span the whole object and the covariance has no clear
 //! normal — and the surface degenerates into a blob around them; only the
 //! drawn slices stay exact there.
-use super::{FieldBox, Frame, contour_points, finish, mean_gap, point_bounds, slice_contours};
+use super::{
+    FieldBox, Frame, contour_points, drawn_contours, mean_gap, point_bounds, voxelise_surface,
+};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::mesh::TriMesh;
+use interslice_core::regions::UnionFind;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::num::NonZero;
@@ -109,14 +112,6 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
-}
-
 impl UnorganizedPoints {
     /// Tangent planes `(centroid, unit normal)` of the points, consistently
     /// oriented outwards.
@@ -168,12 +163,10 @@ impl UnorganizedPoints {
         });
         edges.dedup_by(|x, y| x.1 == y.1 && x.2 == y.2);
         // Kruskal: the minimum spanning forest.
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut uf: UnionFind<u32> = UnionFind::new(n);
         let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
         for &(_, a, b) in &edges {
-            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-            if ra != rb {
-                parent[ra as usize] = rb;
+            if uf.union(a, b) {
                 adj[a as usize].push(b);
                 adj[b as usize].push(a);
             }
@@ -184,7 +177,7 @@ impl UnorganizedPoints {
         // closed surface that point is on the outer hull, so its outward
         // side is unambiguous (unlike "largest u", whose normal may be
         // perpendicular to u at a corner).
-        let mut roots: Vec<u32> = (0..n as u32).map(|i| find(&mut parent, i)).collect();
+        let mut roots: Vec<u32> = (0..n as u32).map(|i| uf.find_mut(i)).collect();
         let mut sum: std::collections::HashMap<u32, ([f64; 3], f64)> =
             std::collections::HashMap::new();
         for (i, &r) in roots.iter().enumerate() {
@@ -213,7 +206,7 @@ impl UnorganizedPoints {
         let mut seeds: Vec<u32> = best.into_values().map(|(_, i)| i).collect();
         seeds.sort_unstable();
         for &s in &seeds {
-            let r = find(&mut parent, s);
+            let r = uf.find_mut(s);
             let (sm, m) = sum[&r];
             let c = sm.map(|x| x / m);
             let p = points[s as usize];
@@ -248,13 +241,13 @@ impl UnorganizedPoints {
         // all of it), so the whole component is turned outwards.
         let mut vote: std::collections::HashMap<u32, f64> = std::collections::HashMap::new();
         for i in 0..n {
-            let r = find(&mut parent, i as u32);
+            let r = uf.find_mut(i as u32);
             let (sm, m) = sum[&r];
             let rel: [f64; 3] = std::array::from_fn(|d| points[i][d] - sm[d] / m);
             *vote.entry(r).or_insert(0.0) += dot(planes[i].1, rel).signum();
         }
         for (i, plane) in planes.iter_mut().enumerate() {
-            let r = find(&mut parent, i as u32);
+            let r = uf.find_mut(i as u32);
             if vote[&r] < 0.0 {
                 plane.1 = plane.1.map(|x| -x);
             }
@@ -359,26 +352,15 @@ impl UnorganizedPoints {
 /// The median perimeter (physical) of the contours of the drawn slices.
 fn median_perimeter(input: &SparseMask<'_>, frame: &Frame) -> f64 {
     let pixel = frame.spacing[0].min(frame.spacing[1]);
-    let mut per: Vec<f64> = input
-        .drawn
-        .par_iter()
-        .flat_map_iter(|&d| {
-            let buf = input
-                .mask
-                .slice(input.axis, d)
-                .expect("validated drawn index");
-            slice_contours(&buf, d, frame, pixel)
-                .into_iter()
-                .map(|(_, pts)| {
-                    let n = pts.len();
-                    (0..n)
-                        .map(|i| {
-                            let (a, b) = (pts[i], pts[(i + 1) % n]);
-                            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
-                        })
-                        .sum::<f64>()
+    let mut per: Vec<f64> = drawn_contours(input, frame, pixel)
+        .map(|pts| {
+            let n = pts.len();
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (pts[i], pts[(i + 1) % n]);
+                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
                 })
-                .collect::<Vec<f64>>()
+                .sum::<f64>()
         })
         .collect();
     per.sort_by(f64::total_cmp);
@@ -393,9 +375,11 @@ impl Interpolator for UnorganizedPoints {
         "original: Hoppe 1992 surface from the contour points (tangent planes, MST orientation), voxelised"
     }
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        voxelise_surface(self, input)
+    }
+    fn surface_mesh(&self, input: SparseMask<'_>) -> Result<Option<TriMesh>, InterpError> {
         input.validate()?;
-        let mesh = self.surface(&input);
-        finish(&input, &mesh)
+        Ok(Some(self.surface(&input)))
     }
 }
 

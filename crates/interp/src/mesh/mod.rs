@@ -2,14 +2,14 @@
 //! meshes of label masks, and voxelisation.
 //!
 //! Every mesh method builds a closed triangle surface from the drawn slices
-//! ([`surface`]), voxelises it ([`voxelize::voxelize`]: voxel centre inside
+//! ([`crate::Interpolator::surface_mesh`]), voxelises it ([`voxelize::voxelize`]: voxel centre inside
 //! the mesh) and then **overwrites every drawn slice with its tracing**. The
 //! surfaces do not pass exactly through the traced pixel boundaries (marching
 //! cubes cuts between pixel centres, the splat inflates, Delaunay leaves
 //! holes, Hoppe's surface smooths), so without that last step the drawn
 //! slices would deviate from what the user traced; with it, drawn slices are
 //! reproduced exactly and a drawn-empty slice stays empty, as every method
-//! must guarantee. The mesh returned by [`surface`] is the raw surface,
+//! must guarantee. The mesh returned by `surface_mesh` is the raw surface,
 //! before that correction.
 //!
 //! Methods, names as `--method` values:
@@ -34,6 +34,8 @@ pub mod voxelize;
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::edt::squared_edt_3d_f32;
 use interslice_core::mesh::TriMesh;
+use interslice_core::morph::Connectivity;
+use interslice_core::regions::holes_2d;
 use interslice_core::trace::mask_polygons;
 use interslice_core::{Axis, Mask};
 use marching_cubes::{Grid, marching_cubes};
@@ -43,14 +45,6 @@ pub use delaunay::DelaunayMethod;
 pub use hoppe::UnorganizedPoints;
 pub use splat::GaussianSplat;
 
-/// The `--method` names of the mesh-based methods.
-pub const MESH_METHODS: [&str; 4] = [
-    "marching-cubes",
-    "gaussian-splat",
-    "delaunay",
-    "unorganized-points",
-];
-
 /// The mesh-based interpolators, in the order of the original system.
 pub fn mesh_methods() -> Vec<Box<dyn Interpolator>> {
     vec![
@@ -59,23 +53,6 @@ pub fn mesh_methods() -> Vec<Box<dyn Interpolator>> {
         Box::new(DelaunayMethod),
         Box::new(UnorganizedPoints::default()),
     ]
-}
-
-/// The surface that mesh method `method` builds from the drawn slices, in
-/// physical units (before the drawn slices are restored, see the module
-/// docs). Errs for an unknown method name or invalid input.
-pub fn surface(method: &str, input: SparseMask<'_>) -> Result<TriMesh, InterpError> {
-    input.validate()?;
-    match method {
-        "marching-cubes" => Ok(stack_surface(&input)),
-        "gaussian-splat" => Ok(GaussianSplat::default().surface(&input)),
-        "delaunay" => Ok(delaunay::surface(&input)),
-        "unorganized-points" => Ok(UnorganizedPoints::default().surface(&input)),
-        other => Err(InterpError::Input(format!(
-            "method '{other}' builds no surface (mesh methods: {})",
-            MESH_METHODS.join(", ")
-        ))),
-    }
 }
 
 /// The closed marching-cubes surface of a whole mask (for the 3D view of any
@@ -212,19 +189,27 @@ impl Frame {
 /// [`interslice_core::trace::mask_polygons`] (pixel-edge boundaries), with
 /// the slice's centre plane at `w = (index + 0.5) * spacing_w`.
 pub(crate) fn contour_points(input: &SparseMask<'_>, frame: &Frame, step: f64) -> Vec<[f64; 3]> {
-    input
-        .drawn
-        .par_iter()
-        .flat_map_iter(|&d| {
-            let buf = input
-                .mask
-                .slice(input.axis, d)
-                .expect("validated drawn index");
-            slice_contours(&buf, d, frame, step)
-                .into_iter()
-                .flat_map(|(_, pts)| pts)
-        })
+    drawn_contours(input, frame, step)
+        .flat_map_iter(|pts| pts)
         .collect()
+}
+
+/// The contours of every drawn slice (points as in [`contour_points`]), in
+/// the order of the drawn slices.
+pub(crate) fn drawn_contours<'a>(
+    input: &'a SparseMask<'_>,
+    frame: &'a Frame,
+    step: f64,
+) -> impl ParallelIterator<Item = Vec<[f64; 3]>> + 'a {
+    input.drawn.par_iter().flat_map_iter(move |&d| {
+        let buf = input
+            .mask
+            .slice(input.axis, d)
+            .expect("validated drawn index");
+        slice_contours(&buf, d, frame, step)
+            .into_iter()
+            .map(|(_, pts)| pts)
+    })
 }
 
 /// The contours of drawn slice `index` (mask `buf`), each as the pixel
@@ -289,6 +274,18 @@ pub(crate) fn slice_contours(
         out.push((pixel, pts));
     }
     out
+}
+
+/// The result of a mesh method: its surface
+/// ([`Interpolator::surface_mesh`]) voxelised, drawn slices restored.
+pub(crate) fn voxelise_surface(
+    method: &dyn Interpolator,
+    input: SparseMask<'_>,
+) -> Result<Mask, InterpError> {
+    let mesh = method
+        .surface_mesh(input)?
+        .expect("a mesh method builds a surface");
+    finish(&input, &mesh)
 }
 
 /// Turn a surface into the method's result: voxelise it on the input's
@@ -426,35 +423,14 @@ impl FieldBox {
     pub fn fill_plane_holes(&self, values: &mut [f32], iso: f32, fill: f32) {
         let [nu, nv, _] = self.size;
         values.par_chunks_mut(nu * nv).for_each(|plane| {
-            let mut reached = vec![false; plane.len()];
-            let mut stack: Vec<usize> = Vec::new();
-            for b in 0..nv {
-                for a in 0..nu {
-                    let i = a + nu * b;
-                    if (a == 0 || b == 0 || a + 1 == nu || b + 1 == nv) && plane[i] <= iso {
-                        reached[i] = true;
-                        stack.push(i);
-                    }
-                }
-            }
-            while let Some(i) = stack.pop() {
-                let (a, b) = ((i % nu) as isize, (i / nu) as isize);
-                for db in -1isize..=1 {
-                    for da in -1isize..=1 {
-                        let (x, y) = (a + da, b + db);
-                        if x < 0 || y < 0 || x >= nu as isize || y >= nv as isize {
-                            continue;
-                        }
-                        let j = x as usize + nu * y as usize;
-                        if !reached[j] && plane[j] <= iso {
-                            reached[j] = true;
-                            stack.push(j);
-                        }
-                    }
-                }
-            }
-            for (v, r) in plane.iter_mut().zip(reached) {
-                if !r && *v <= iso {
+            // Outside is everything not `<= iso`, NaN included.
+            let outside: Vec<bool> = plane
+                .iter()
+                .map(|&v| v.partial_cmp(&iso).is_none_or(|o| o.is_gt()))
+                .collect();
+            let enclosed = holes_2d(&outside, nu, nv, Connectivity::Full, |_| true);
+            for (v, e) in plane.iter_mut().zip(enclosed) {
+                if e {
                     *v = fill;
                 }
             }
@@ -525,9 +501,11 @@ impl Interpolator for MarchingCubesMethod {
         "original: marching cubes on the stacked drawn slices, stretched back along the axis, voxelised"
     }
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        voxelise_surface(self, input)
+    }
+    fn surface_mesh(&self, input: SparseMask<'_>) -> Result<Option<TriMesh>, InterpError> {
         input.validate()?;
-        let mesh = stack_surface(&input);
-        finish(&input, &mesh)
+        Ok(Some(stack_surface(&input)))
     }
 }
 
@@ -535,16 +513,7 @@ impl Interpolator for MarchingCubesMethod {
 fn stack_surface(input: &SparseMask<'_>) -> TriMesh {
     let frame = Frame::of(input);
     let (w, h) = (frame.dims[0], frame.dims[1]);
-    let slices: Vec<Vec<bool>> = input
-        .drawn
-        .par_iter()
-        .map(|&d| {
-            input
-                .mask
-                .slice(input.axis, d)
-                .expect("validated drawn index")
-        })
-        .collect();
+    let slices = crate::slices::drawn_slices(input);
     // In-plane bounding box over all drawn slices.
     let mut lo = [usize::MAX; 2];
     let mut hi = [0usize; 2];

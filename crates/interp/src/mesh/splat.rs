@@ -34,7 +34,7 @@
 //! Objects further apart than `2 d` stay separate; closer ones merge (a
 //! documented limit of the method). A cross-section with a hole (a ring) is
 //! filled, since the splat of its two contours encloses the hole.
-use super::{FieldBox, Frame, contour_points, finish, max_filled_gap, point_bounds};
+use super::{FieldBox, Frame, contour_points, max_filled_gap, point_bounds, voxelise_surface};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::mesh::TriMesh;
@@ -129,8 +129,10 @@ impl Interpolator for GaussianSplat {
         "original: Gaussian splats around the contour points (VTK defaults), iso-surface, voxelised; inflates"
     }
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        voxelise_surface(self, input)
+    }
+    fn surface_mesh(&self, input: SparseMask<'_>) -> Result<Option<TriMesh>, InterpError> {
         input.validate()?;
-        let mesh = self.surface(&input);
-        finish(&input, &mesh)
+        Ok(Some(self.surface(&input)))
     }
 }

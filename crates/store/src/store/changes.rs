@@ -4,7 +4,7 @@
 //! off). A change costs storage in proportion to what it changed, whatever
 //! the size of the slice.
 use super::audit::audit;
-use super::contours::{remove_contours, restore_contours, set_empty};
+use super::contours::{remove_contours, restore_contours, set_empty, slice_params};
 use super::{Store, axis_str, parse_axis};
 use crate::Result;
 use crate::model::{SliceKey, UndoOutcome};
@@ -59,15 +59,7 @@ pub(super) fn record_change(
         "INSERT INTO changes (cell, user_id, label, axis, slice, empty_before, empty_after) \
          VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
     )?
-    .execute(params![
-        key.cell,
-        key.user_id,
-        key.label,
-        axis_str(key.axis),
-        key.index as i64,
-        delta.empty_before,
-        delta.empty_after
-    ])?;
+    .execute(slice_params!(key, delta.empty_before, delta.empty_after))?;
     let change = tx.last_insert_rowid();
     let mut st = tx.prepare_cached(
         "INSERT INTO change_contours (change_id, contour_id, added) VALUES (?1, ?2, ?3)",

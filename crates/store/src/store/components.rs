@@ -97,12 +97,7 @@ mod tests {
         let s = Store::open_in_memory().unwrap();
         s.sync_components(&Components::from_names("Tumour,Oedema").unwrap())
             .unwrap();
-        let names: Vec<(u16, String)> = s
-            .labels()
-            .unwrap()
-            .into_iter()
-            .map(|l| (l.id, l.name))
-            .collect();
+        let names = crate::store::fixtures::label_names(&s);
         assert_eq!(
             names,
             [(1, "Tumour".to_string()), (2, "Oedema".to_string())]

@@ -17,16 +17,18 @@ use rusqlite::{OptionalExtension, Transaction, params};
 /// The five columns of a slice key as SQL parameters `?1..?5`, in the order
 /// of [`SLICE_WHERE`].
 macro_rules! slice_params {
-    ($key:expr) => {
+    ($key:expr $(, $extra:expr)*) => {
         params![
             $key.cell,
             $key.user_id,
             $key.label,
             axis_str($key.axis),
             $key.index as i64
+            $(, $extra)*
         ]
     };
 }
+pub(super) use slice_params;
 
 /// The rows of one label on one slice of one user's tracing.
 const SLICE_WHERE: &str = "cell = ?1 AND user_id = ?2 AND label = ?3 AND axis = ?4 AND slice = ?5";
@@ -167,14 +169,7 @@ pub(super) fn set_empty(tx: &Transaction<'_>, key: &SliceKey, empty: bool) -> Re
             "INSERT INTO drawn_empty (cell, user_id, label, axis, slice, created) \
              VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
         )?
-        .execute(params![
-            key.cell,
-            key.user_id,
-            key.label,
-            axis_str(key.axis),
-            key.index as i64,
-            now_rfc3339()
-        ])?;
+        .execute(slice_params!(key, now_rfc3339()))?;
     }
     Ok(was)
 }

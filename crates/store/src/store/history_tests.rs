@@ -1,39 +1,11 @@
 //! The change log and the audit log: their cost per write, exact undo/redo,
 //! a complete audit trail, the conversion of version-1 history and the WAL
 //! bound.
+use super::fixtures::*;
 use super::*;
 use crate::model::*;
 use std::collections::{BTreeMap, BTreeSet};
 
-fn store_with_cell() -> (Store, User) {
-    let s = Store::open_in_memory().unwrap();
-    s.upsert_cell("cell1", "cell1.nii.gz").unwrap();
-    let u = s.ensure_user("alice").unwrap();
-    (s, u)
-}
-
-fn key(user: &User, label: u16, index: usize) -> SliceKey {
-    SliceKey {
-        cell: "cell1".into(),
-        user_id: user.id,
-        label,
-        axis: Axis::Z,
-        index,
-    }
-}
-
-fn square(x: f64) -> NewContour {
-    NewContour {
-        points: vec![[x, x], [x + 4.0, x], [x + 4.0, x + 4.0], [x, x + 4.0]],
-        pressure: Some(vec![0.5; 4]),
-        times_ms: Some(vec![0.0, 10.0, 20.0, 35.0]),
-        tool: Some("pen".into()),
-        duration_ms: None,
-    }
-}
-
-/// Everything a user's tracing of the cell is: the contours and the drawn
-/// slices (with their drawn-empty marks) of labels 1 and 2.
 fn snapshot(s: &Store, u: &User) -> (Vec<StoredContour>, Vec<Vec<DrawnSlice>>) {
     let q = ContourQuery {
         cell: "cell1".into(),

@@ -207,6 +207,8 @@ impl Store {
 }
 
 #[cfg(test)]
+mod fixtures;
+#[cfg(test)]
 mod history_tests;
 #[cfg(test)]
 mod tests;

@@ -41,18 +41,7 @@ impl Store {
                 "SELECT id, cell, user_id, label, axis, method, voxels, created FROM results \
                  WHERE cell = ?1 AND user_id = ?2 ORDER BY id DESC",
             )?;
-            let rows = st.query_map(params![cell, user_id], |r| {
-                Ok(ResultMeta {
-                    id: r.get(0)?,
-                    cell: r.get(1)?,
-                    user_id: r.get(2)?,
-                    label: r.get(3)?,
-                    axis: parse_axis(&r.get::<_, String>(4)?)?,
-                    method: r.get(5)?,
-                    voxels: r.get::<_, i64>(6)? as u64,
-                    created: r.get(7)?,
-                })
-            })?;
+            let rows = st.query_map(params![cell, user_id], result_meta)?;
             Ok(rows.collect::<rusqlite::Result<_>>()?)
         })
     }
@@ -67,16 +56,7 @@ impl Store {
                 )?
                 .query_row([id], |r| {
                     Ok((
-                        ResultMeta {
-                            id: r.get(0)?,
-                            cell: r.get(1)?,
-                            user_id: r.get(2)?,
-                            label: r.get(3)?,
-                            axis: parse_axis(&r.get::<_, String>(4)?)?,
-                            method: r.get(5)?,
-                            voxels: r.get::<_, i64>(6)? as u64,
-                            created: r.get(7)?,
-                        },
+                        result_meta(r)?,
                         r.get::<_, String>(8)?,
                         r.get::<_, Vec<u8>>(9)?,
                     ))
@@ -93,4 +73,19 @@ impl Store {
             Volume::from_vec(geometry, data).map_err(|e| StoreError::Corrupt(e.to_string()))?;
         Ok(Some((meta, mask)))
     }
+}
+
+/// The [`ResultMeta`] of a row whose first columns are `id, cell, user_id,
+/// label, axis, method, voxels, created`.
+fn result_meta(r: &rusqlite::Row<'_>) -> rusqlite::Result<ResultMeta> {
+    Ok(ResultMeta {
+        id: r.get(0)?,
+        cell: r.get(1)?,
+        user_id: r.get(2)?,
+        label: r.get(3)?,
+        axis: parse_axis(&r.get::<_, String>(4)?)?,
+        method: r.get(5)?,
+        voxels: r.get::<_, i64>(6)? as u64,
+        created: r.get(7)?,
+    })
 }

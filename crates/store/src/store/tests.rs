@@ -1,33 +1,7 @@
+use super::fixtures::*;
 use super::*;
 use crate::model::*;
 use interslice_core::{Geometry, LengthUnit, Volume};
-
-fn store_with_cell() -> (Store, User) {
-    let s = Store::open_in_memory().unwrap();
-    s.upsert_cell("cell1", "cell1.nii.gz").unwrap();
-    let u = s.ensure_user("alice").unwrap();
-    (s, u)
-}
-
-fn key(user: &User, label: u16, index: usize) -> SliceKey {
-    SliceKey {
-        cell: "cell1".into(),
-        user_id: user.id,
-        label,
-        axis: Axis::Z,
-        index,
-    }
-}
-
-fn square(x: f64) -> NewContour {
-    NewContour {
-        points: vec![[x, x], [x + 4.0, x], [x + 4.0, x + 4.0], [x, x + 4.0]],
-        pressure: Some(vec![0.5; 4]),
-        times_ms: Some(vec![0.0, 10.0, 20.0, 35.0]),
-        tool: Some("pen".into()),
-        duration_ms: None,
-    }
-}
 
 #[test]
 fn migrations_reach_the_latest_version_and_reopen() {
@@ -65,12 +39,7 @@ fn newer_schema_is_refused() {
 #[test]
 fn default_labels_and_adding_one() {
     let s = Store::open_in_memory().unwrap();
-    let names: Vec<(u16, String)> = s
-        .labels()
-        .unwrap()
-        .into_iter()
-        .map(|l| (l.id, l.name))
-        .collect();
+    let names = label_names(&s);
     assert_eq!(
         names,
         vec![
@@ -175,6 +144,14 @@ fn invalid_contours_are_refused() {
     ));
 }
 
+/// Drawn slices `(index, empty)`.
+fn drawn_at(slices: &[(usize, bool)]) -> Vec<DrawnSlice> {
+    slices
+        .iter()
+        .map(|&(index, empty)| DrawnSlice { index, empty })
+        .collect()
+}
+
 #[test]
 fn drawn_slices_replace_empty_and_delete() {
     let (s, u) = store_with_cell();
@@ -183,19 +160,7 @@ fn drawn_slices_replace_empty_and_delete() {
     s.mark_empty(&key(&u, 1, 8)).unwrap();
     s.add_contour(&key(&u, 2, 5), square(0.0), None).unwrap();
     let d = s.drawn("cell1", u.id, 1, Axis::Z).unwrap();
-    assert_eq!(
-        d,
-        vec![
-            DrawnSlice {
-                index: 3,
-                empty: false
-            },
-            DrawnSlice {
-                index: 8,
-                empty: true
-            }
-        ]
-    );
+    assert_eq!(d, drawn_at(&[(3, false), (8, true)]));
     // Replace with one contour.
     let r = s.replace_slice(&key(&u, 1, 3), vec![square(2.0)]).unwrap();
     assert_eq!(r.len(), 1);
@@ -203,16 +168,7 @@ fn drawn_slices_replace_empty_and_delete() {
     s.add_contour(&key(&u, 1, 8), square(1.0), None).unwrap();
     assert_eq!(
         s.drawn("cell1", u.id, 1, Axis::Z).unwrap(),
-        vec![
-            DrawnSlice {
-                index: 3,
-                empty: false
-            },
-            DrawnSlice {
-                index: 8,
-                empty: false
-            }
-        ]
+        drawn_at(&[(3, false), (8, false)])
     );
     // Clearing removes the slice from the drawn set.
     s.replace_slice(&key(&u, 1, 8), vec![]).unwrap();

@@ -35,6 +35,14 @@ fn validate_name(name: &str) -> Result<()> {
     Ok(())
 }
 
+/// The user called `name` in the open transaction, if any.
+fn user_named(tx: &rusqlite::Transaction<'_>, name: &str) -> Result<Option<User>> {
+    Ok(tx
+        .prepare_cached("SELECT id, name, role, password_hash FROM users WHERE name = ?1")?
+        .query_row([name], user_from_row)
+        .optional()?)
+}
+
 pub(super) fn user_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<User> {
     let role: String = r.get(2)?;
     Ok(User {
@@ -48,12 +56,7 @@ pub(super) fn user_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<User> {
 impl Store {
     /// The user called `name`, if any.
     pub fn user(&self, name: &str) -> Result<Option<User>> {
-        self.read(|tx| {
-            Ok(tx
-                .prepare_cached("SELECT id, name, role, password_hash FROM users WHERE name = ?1")?
-                .query_row([name], user_from_row)
-                .optional()?)
-        })
+        self.read(|tx| user_named(tx, name))
     }
 
     /// Every user, by name.
@@ -92,9 +95,7 @@ impl Store {
                  password_hash = COALESCE(excluded.password_hash, users.password_hash)",
             )?
             .execute(params![name, role.as_str(), hash, now_rfc3339()])?;
-            let user = tx
-                .prepare_cached("SELECT id, name, role, password_hash FROM users WHERE name = ?1")?
-                .query_row([name], user_from_row)?;
+            let user = user_named(tx, name)?.ok_or(rusqlite::Error::QueryReturnedNoRows)?;
             audit(
                 tx,
                 Some(user.id),
@@ -118,9 +119,7 @@ impl Store {
                 "INSERT OR IGNORE INTO users (name, role, created) VALUES (?1, 'tracer', ?2)",
             )?
             .execute(params![name, now_rfc3339()])?;
-            let user = tx
-                .prepare_cached("SELECT id, name, role, password_hash FROM users WHERE name = ?1")?
-                .query_row([name], user_from_row)?;
+            let user = user_named(tx, name)?.ok_or(rusqlite::Error::QueryReturnedNoRows)?;
             audit(
                 tx,
                 Some(user.id),
