@@ -123,7 +123,7 @@ fn label_rates(
     // Rates of the held-out slices (index into `drawn`).
     let mut held_rate = vec![None; drawn.len()];
     if drawn.len() >= 3 {
-        let compact = Compact::of(&SparseMask { mask, axis, drawn })?;
+        let compact = Compact::of(&SparseMask::new(mask, axis, drawn))?;
         for h in compact.held_out(method)? {
             let truth = &slices[h.pos];
             let wrong = truth

@@ -644,7 +644,7 @@ impl Interpolator for ShapeAligned {
         let nd = drawn.len();
         // Whole-slice maps (drawn-empty slices coned, see `drawn_maps`) give
         // the cubic slopes; the components give the groups.
-        let maps = drawn_maps(&input, &plane, &vec![true; nd]);
+        let maps = drawn_maps(&input, &plane, &vec![true; nd])?;
         let slices: Vec<Drawn> = drawn
             .par_iter()
             .zip(maps)
@@ -692,9 +692,10 @@ impl Interpolator for ShapeAligned {
                 &plane,
             ))
         };
+        input.check_cancelled()?;
         let first_cap = end_cap(0, 1);
         let last_cap = end_cap(nd - 1, nd - 2);
-        Ok(assemble(&input, |s| {
+        assemble(&input, |s| {
             let mut out = vec![false; plane.len()];
             let mut any = false;
             let p = drawn.partition_point(|&d| d < s);
@@ -761,7 +762,7 @@ impl Interpolator for ShapeAligned {
                 }
             }
             any.then_some(out)
-        }))
+        })
     }
 }
 

@@ -106,6 +106,7 @@ impl Interpolator for ShapeAuto {
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         input.validate()?;
         let choice = self.choose(&input)?;
+        input.check_cancelled()?;
         candidates()[choice.index].interpolate(input)
     }
 }

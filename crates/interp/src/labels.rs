@@ -71,11 +71,7 @@ fn run(
         .par_iter()
         .map(|&l| {
             let m = traced_mask(sparse, axis, &drawn, l);
-            let input = SparseMask {
-                mask: &m,
-                axis,
-                drawn: &drawn,
-            };
+            let input = SparseMask::new(&m, axis, &drawn);
             if confidence {
                 let (mask, c) = method.interpolate_with_confidence(input)?;
                 Ok((mask, Some(c)))

@@ -56,7 +56,7 @@ impl Interpolator for Linear {
             .map(|g| match_nearest(&contours[g], &contours[g + 1]))
             .collect();
         let drawn = input.drawn;
-        Ok(assemble(&input, |s| {
+        assemble(&input, |s| {
             let g = bracket(drawn, s)?;
             let (a, b) = (drawn[g], drawn[g + 1]);
             if contours[g].is_empty() || contours[g + 1].is_empty() {
@@ -74,7 +74,7 @@ impl Interpolator for Linear {
                 })
                 .collect();
             Some(fill_even_odd(&moved, plane.width, plane.height))
-        }))
+        })
     }
 }
 

@@ -96,11 +96,7 @@ impl Compact {
                 let (w, hh) = sparse.slice_shape(self.axis);
                 sparse.set_slice(self.axis, h, &vec![false; w * hh])?;
             }
-            let pred = method.interpolate(SparseMask {
-                mask: &sparse,
-                axis: self.axis,
-                drawn: &kept,
-            })?;
+            let pred = method.interpolate(SparseMask::new(&sparse, self.axis, &kept))?;
             for h in held {
                 out.push(HeldOut {
                     pos: h,

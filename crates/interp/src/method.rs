@@ -1,6 +1,6 @@
 //! The interpolator trait shared by every method.
 use interslice_core::mesh::TriMesh;
-use interslice_core::{Axis, Mask, Volume};
+use interslice_core::{Axis, Cancel, Mask, Volume};
 use thiserror::Error;
 
 /// Errors of interpolation; messages are one line for the user.
@@ -24,6 +24,42 @@ pub struct SparseMask<'a> {
     pub axis: Axis,
     /// Drawn slice indices along `axis`, sorted ascending, no duplicates.
     pub drawn: &'a [usize],
+    /// Checked between slices (and between the stages of a method), so a
+    /// request that is dropped or timed out stops within one slice's work.
+    pub cancel: Option<&'a Cancel>,
+}
+
+impl<'a> SparseMask<'a> {
+    /// The input of one label's interpolation (never cancelled).
+    pub fn new(mask: &'a Mask, axis: Axis, drawn: &'a [usize]) -> SparseMask<'a> {
+        SparseMask {
+            mask,
+            axis,
+            drawn,
+            cancel: None,
+        }
+    }
+
+    /// The same input, stopped with `Err(Cancelled)` once `cancel` is.
+    pub fn with_cancel(self, cancel: &'a Cancel) -> SparseMask<'a> {
+        SparseMask {
+            cancel: Some(cancel),
+            ..self
+        }
+    }
+
+    /// Whether the work was cancelled (a loop's cheap test).
+    pub fn is_cancelled(&self) -> bool {
+        self.cancel.is_some_and(Cancel::is_cancelled)
+    }
+
+    /// `Err(Cancelled)` once cancelled: the `?` between stages.
+    pub fn check_cancelled(&self) -> Result<(), InterpError> {
+        match self.cancel {
+            Some(c) => Ok(c.check()?),
+            None => Ok(()),
+        }
+    }
 }
 
 /// A method that fills the slices between drawn slices.

@@ -91,11 +91,7 @@ pub fn score(
     };
     let sparse = sparse_of(truth, axis, &drawn);
     let t = std::time::Instant::now();
-    let out = method.interpolate(SparseMask {
-        mask: &sparse,
-        axis,
-        drawn: &drawn,
-    })?;
+    let out = method.interpolate(SparseMask::new(&sparse, axis, &drawn))?;
     let seconds = t.elapsed().as_secs_f64();
     let all: Vec<usize> = (0..truth.slice_count(axis)).collect();
     Ok(Some(Score {

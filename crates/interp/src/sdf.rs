@@ -1,7 +1,7 @@
 //! Signed distance maps of drawn slices, the common ground of the shape-based
 //! methods (Raya & Udupa 1990; Herman et al. 1992).
-use crate::SparseMask;
 use crate::slices::Plane;
+use crate::{InterpError, SparseMask};
 use interslice_core::edt::squared_edt_2d_f32;
 use rayon::prelude::*;
 
@@ -58,7 +58,11 @@ pub fn empty_value(plane: &Plane) -> f32 {
 /// touches 0 at the deepest point of the neighbour, so a linear blend erodes
 /// the object to a point on the empty slice: a cone, not a cut. An empty
 /// slice without non-empty neighbours gets [`empty_value`].
-pub fn drawn_maps(input: &SparseMask<'_>, plane: &Plane, needed: &[bool]) -> Vec<Option<Vec<f32>>> {
+pub fn drawn_maps(
+    input: &SparseMask<'_>,
+    plane: &Plane,
+    needed: &[bool],
+) -> Result<Vec<Option<Vec<f32>>>, InterpError> {
     let d = input.drawn;
     let n = d.len();
     let masks: Vec<Option<Vec<bool>>> = (0..n)
@@ -89,11 +93,16 @@ pub fn drawn_maps(input: &SparseMask<'_>, plane: &Plane, needed: &[bool]) -> Vec
         .collect();
     let sdfs: Vec<Option<Vec<f32>>> = (0..n)
         .into_par_iter()
-        .map(|i| compute[i].then(|| signed_distance(masks[i].as_ref().expect("read"), plane)))
+        .map(|i| {
+            // A cancelled run skips the rest of its transforms.
+            (compute[i] && !input.is_cancelled())
+                .then(|| signed_distance(masks[i].as_ref().expect("read"), plane))
+        })
         .collect();
+    input.check_cancelled()?;
     let depth = |m: &[f32]| -m.iter().copied().fold(0.0f32, f32::min);
     let far = empty_value(plane);
-    (0..n)
+    Ok((0..n)
         .into_par_iter()
         .map(|i| {
             if !needed[i] {
@@ -119,5 +128,5 @@ pub fn drawn_maps(input: &SparseMask<'_>, plane: &Plane, needed: &[bool]) -> Vec
             }
             Some(out)
         })
-        .collect()
+        .collect())
 }

@@ -23,7 +23,11 @@ pub struct ShapeBased;
 /// drawn slices whose neighbours are all drawn: they are never needed).
 /// `extra` widens "border" to `extra` drawn slices on each side of a gap,
 /// for schemes that look further (cubic).
-pub fn drawn_sdfs(input: &SparseMask<'_>, plane: &Plane, extra: usize) -> Vec<Option<Vec<f32>>> {
+pub fn drawn_sdfs(
+    input: &SparseMask<'_>,
+    plane: &Plane,
+    extra: usize,
+) -> Result<Vec<Option<Vec<f32>>>, InterpError> {
     let d = input.drawn;
     let n = d.len();
     let mut needed = vec![false; n];
@@ -47,9 +51,9 @@ impl Interpolator for ShapeBased {
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         input.validate()?;
         let plane = Plane::of(&input);
-        let sdfs = drawn_sdfs(&input, &plane, 0);
+        let sdfs = drawn_sdfs(&input, &plane, 0)?;
         let drawn = input.drawn;
-        Ok(assemble(&input, |s| {
+        assemble(&input, |s| {
             let g = bracket(drawn, s)?;
             let (a, b) = (drawn[g], drawn[g + 1]);
             let t = ((s - a) as f64 / (b - a) as f64) as f32;
@@ -61,6 +65,6 @@ impl Interpolator for ShapeBased {
                     .map(|(&x, &y)| (1.0 - t) * x + t * y < 0.0)
                     .collect(),
             )
-        }))
+        })
     }
 }

@@ -50,11 +50,11 @@ impl Interpolator for ShapeCubic {
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         input.validate()?;
         let plane = Plane::of(&input);
-        let sdfs = drawn_sdfs(&input, &plane, 1);
+        let sdfs = drawn_sdfs(&input, &plane, 1)?;
         let drawn = input.drawn;
         let n = drawn.len();
         let z = |i: usize| drawn[i] as f32 * plane.slice_spacing as f32;
-        Ok(assemble(&input, |s| {
+        assemble(&input, |s| {
             let g = bracket(drawn, s)?;
             let h = z(g + 1) - z(g);
             let t = (s - drawn[g]) as f32 / (drawn[g + 1] - drawn[g]) as f32;
@@ -87,6 +87,6 @@ impl Interpolator for ShapeCubic {
                 out[p] = hermite(a, b, m0, m1, h, t) < 0.0;
             }
             Some(out)
-        }))
+        })
     }
 }

@@ -1,7 +1,7 @@
 //! Slice plumbing shared by the slice-wise methods: reading the drawn slices
 //! and assembling a volume from per-slice results without holding the volume
 //! twice along the fast axis.
-use crate::SparseMask;
+use crate::{InterpError, SparseMask};
 use interslice_core::{Axis, Mask, Volume};
 use rayon::prelude::*;
 
@@ -64,7 +64,16 @@ pub fn drawn_slices(input: &SparseMask<'_>) -> Vec<Vec<bool>> {
 pub fn assemble(
     input: &SparseMask<'_>,
     produce: impl Fn(usize) -> Option<Vec<bool>> + Sync,
-) -> Mask {
+) -> Result<Mask, InterpError> {
+    // Once cancelled, no further slice is produced and the run ends in
+    // `Err(Cancelled)`: a dropped request stops within one slice's work.
+    let produce = |s: usize| {
+        if input.is_cancelled() {
+            None
+        } else {
+            produce(s)
+        }
+    };
     let geometry = input.mask.geometry().clone();
     let axis = input.axis;
     let n = input.mask.slice_count(axis);
@@ -119,7 +128,8 @@ pub fn assemble(
                 });
         }
     }
-    out
+    input.check_cancelled()?;
+    Ok(out)
 }
 
 /// For slice `s`, the pair of consecutive drawn positions `(i, i + 1)` in

@@ -35,12 +35,7 @@ fn image_of(truth: &Mask, amp: f32) -> Arc<Volume<f32>> {
 }
 
 fn interpolate(m: &dyn Interpolator, sparse: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
-    m.interpolate(SparseMask {
-        mask: sparse,
-        axis,
-        drawn,
-    })
-    .unwrap()
+    m.interpolate(SparseMask::new(sparse, axis, drawn)).unwrap()
 }
 
 proptest! {
@@ -68,7 +63,7 @@ proptest! {
         let sparse = sparse_of(&truth, axis, &drawn);
         let m = ImageGuided::new(image_of(&truth, amp));
         let (out, conf) = m
-            .interpolate_with_confidence(SparseMask { mask: &sparse, axis, drawn: &drawn })
+            .interpolate_with_confidence(SparseMask::new(&sparse, axis, &drawn))
             .unwrap();
         prop_assert_eq!(out.geometry(), truth.geometry());
         for &d in &drawn {
@@ -158,11 +153,7 @@ fn leave_one_out_keeps_the_shape_where_the_image_is_noise() {
     let img = Arc::new(Volume::from_vec(truth.geometry().clone(), data).unwrap());
     let drawn = drawn_for_skip(&truth, Axis::Z, 3).unwrap();
     let sparse = sparse_of(&truth, Axis::Z, &drawn);
-    let input = SparseMask {
-        mask: &sparse,
-        axis: Axis::Z,
-        drawn: &drawn,
-    };
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
     let m = ImageGuided::new(img);
     let plan = m.plan(&input).unwrap();
     assert_eq!(plan.params.w, 0.0, "{plan:?}");

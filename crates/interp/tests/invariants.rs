@@ -54,7 +54,7 @@ proptest! {
             sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
         }
         for m in methods() {
-            let out = m.interpolate(SparseMask { mask: &sparse, axis, drawn: &drawn }).unwrap();
+            let out = m.interpolate(SparseMask::new(&sparse, axis, &drawn)).unwrap();
             prop_assert_eq!(out.geometry(), full.geometry());
             for &d in &drawn {
                 prop_assert_eq!(

@@ -51,11 +51,7 @@ fn run(name: &str, full: &Mask, axis: Axis, step: usize) -> (Mask, Vec<usize>) {
     let drawn = every(full.slice_count(axis), step);
     let sp = sparse(full, axis, &drawn);
     let out = method(name)
-        .interpolate(SparseMask {
-            mask: &sp,
-            axis,
-            drawn: &drawn,
-        })
+        .interpolate(SparseMask::new(&sp, axis, &drawn))
         .unwrap();
     (out, drawn)
 }
@@ -181,15 +177,7 @@ fn surfaces_are_closed_and_enclose_the_object() {
     let sp = sparse(&e, Axis::Y, &drawn);
     let true_volume = count(&e) as f64;
     for name in ["marching-cubes", "gaussian-splat", "unorganized-points"] {
-        let m = surface(
-            name,
-            SparseMask {
-                mask: &sp,
-                axis: Axis::Y,
-                drawn: &drawn,
-            },
-        )
-        .unwrap();
+        let m = surface(name, SparseMask::new(&sp, Axis::Y, &drawn)).unwrap();
         assert!(m.is_closed_and_oriented(), "{name}: surface not closed");
         let v = m.signed_volume();
         assert!(
@@ -197,38 +185,16 @@ fn surfaces_are_closed_and_enclose_the_object() {
             "{name}: volume {v} vs {true_volume}"
         );
     }
-    let m = surface(
-        "delaunay",
-        SparseMask {
-            mask: &sp,
-            axis: Axis::Y,
-            drawn: &drawn,
-        },
-    )
-    .unwrap();
+    let m = surface("delaunay", SparseMask::new(&sp, Axis::Y, &drawn)).unwrap();
     assert!(m.signed_volume() > 0.5 * true_volume);
-    assert!(
-        surface(
-            "linear",
-            SparseMask {
-                mask: &sp,
-                axis: Axis::Y,
-                drawn: &drawn
-            }
-        )
-        .is_err()
-    );
+    assert!(surface("linear", SparseMask::new(&sp, Axis::Y, &drawn)).is_err());
 }
 
 #[test]
 fn fewer_than_two_drawn_slices_is_an_error() {
     let e = ellipsoid();
     for m in mesh_methods() {
-        let r = m.interpolate(SparseMask {
-            mask: &e,
-            axis: Axis::Z,
-            drawn: &[30],
-        });
+        let r = m.interpolate(SparseMask::new(&e, Axis::Z, &[30]));
         assert!(r.is_err(), "{}", m.name());
     }
 }
@@ -258,7 +224,7 @@ mod random_shapes {
             });
             let drawn = every(full.slice_count(axis), step);
             let sp = sparse(&full, axis, &drawn);
-            let input = SparseMask { mask: &sp, axis, drawn: &drawn };
+            let input = SparseMask::new(&sp, axis, &drawn);
             for name in mesh_names() {
                 let out = method(name).interpolate(input).unwrap();
                 for &d in &drawn {

@@ -59,11 +59,7 @@ fn run(
 ) -> Mask {
     let sp = sparse(full, axis, drawn);
     method
-        .interpolate(SparseMask {
-            mask: &sp,
-            axis,
-            drawn,
-        })
+        .interpolate(SparseMask::new(&sp, axis, drawn))
         .unwrap_or_else(|e| panic!("{}: {e}", method.name()))
 }
 
@@ -286,17 +282,9 @@ fn a_u_shaped_object_is_recovered() {
 fn fewer_than_two_drawn_slices_is_an_error() {
     let gt = test_ellipsoid();
     for m in methods() {
-        let e = m.interpolate(SparseMask {
-            mask: &gt,
-            axis: Axis::Z,
-            drawn: &[10],
-        });
+        let e = m.interpolate(SparseMask::new(&gt, Axis::Z, &[10]));
         assert!(e.is_err(), "{} accepted one drawn slice", m.name());
-        let e = m.interpolate(SparseMask {
-            mask: &gt,
-            axis: Axis::Z,
-            drawn: &[10, 400],
-        });
+        let e = m.interpolate(SparseMask::new(&gt, Axis::Z, &[10, 400]));
         assert!(e.is_err(), "{} accepted an out-of-range slice", m.name());
     }
 }

@@ -75,11 +75,7 @@ pub fn interpolate_label(
             drawn.len()
         )));
     }
-    let out = method.interpolate(SparseMask {
-        mask: &mask,
-        axis,
-        drawn: &drawn,
-    })?;
+    let out = method.interpolate(SparseMask::new(&mask, axis, &drawn).with_cancel(cancel))?;
     cancel.check()?;
     Ok((out, drawn))
 }

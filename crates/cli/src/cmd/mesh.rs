@@ -133,11 +133,7 @@ fn method_surface(labels: &LabelVolume, name: &str, a: &Args) -> Result<TriMesh>
     let mut out = TriMesh::new();
     for l in wanted {
         let traced = traced_mask(labels, a.axis, &drawn, l);
-        let input = SparseMask {
-            mask: &traced,
-            axis: a.axis,
-            drawn: &drawn,
-        };
+        let input = SparseMask::new(&traced, a.axis, &drawn);
         let m = match method.surface_mesh(input) {
             Ok(Some(m)) => Ok(m),
             Ok(None) => method.interpolate(input).map(|r| mask_surface(&r)),

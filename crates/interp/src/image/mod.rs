@@ -268,6 +268,7 @@ impl ImageGuided {
         confidence: bool,
     ) -> Result<(Mask, Option<Volume<f32>>), InterpError> {
         let plan = self.plan(input)?;
+        input.check_cancelled()?;
         let prior = candidates()[plan.prior].interpolate(*input)?;
         let Some(model) = plan.model.as_ref().filter(|_| plan.params.w > 0.0) else {
             let c = confidence.then(|| shape_confidence(&prior, input, plan.scale));
@@ -279,6 +280,9 @@ impl ImageGuided {
         let fused: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
             .into_par_iter()
             .map(|s| {
+                if input.is_cancelled() {
+                    return None;
+                }
                 let g = bracket(drawn, s)?;
                 let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
                 let p = prior.slice(input.axis, s).expect("slice in range");
@@ -297,7 +301,7 @@ impl ImageGuided {
                 ))
             })
             .collect();
-        let mask = assemble(input, |s| fused[s].as_ref().map(|f| f.0.clone()));
+        let mask = assemble(input, |s| fused[s].as_ref().map(|f| f.0.clone()))?;
         let conf = confidence.then(|| {
             let mut c = shape_confidence(&mask, input, plan.scale);
             for (s, f) in fused.iter().enumerate() {

@@ -282,10 +282,15 @@ pub(crate) fn voxelise_surface(
     method: &dyn Interpolator,
     input: SparseMask<'_>,
 ) -> Result<Mask, InterpError> {
+    // Cancellation is checked between the stages (surface, voxelisation).
+    input.check_cancelled()?;
     let mesh = method
         .surface_mesh(input)?
         .expect("a mesh method builds a surface");
-    finish(&input, &mesh)
+    input.check_cancelled()?;
+    let out = finish(&input, &mesh)?;
+    input.check_cancelled()?;
+    Ok(out)
 }
 
 /// Turn a surface into the method's result: voxelise it on the input's
