@@ -1,8 +1,6 @@
 //! The handlers of `docs/API.md`.
 use crate::auth::{self, Auth, reader_target};
-use crate::cells::{le_bytes, safe_relative_path};
 use crate::error::{ApiError, ApiJson, ApiPath, ApiQuery};
-use crate::groundtruth;
 use crate::{SharedState, openapi};
 use axum::Router;
 use axum::extract::State;
@@ -10,6 +8,10 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{delete, get, post, put};
 use interslice_core::{AnyVolume, Axis, Cancel, Geometry, LabelVolume};
+use interslice_project::cells::{le_bytes, safe_relative_path};
+use interslice_project::export::{self, readable_result};
+use interslice_project::groundtruth;
+use interslice_project::methods::method_by_name;
 use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredContour, User};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -121,21 +123,6 @@ async fn job<T: Send + 'static>(
     state.jobs.run(f).await
 }
 
-/// The interpolator called `name` (slice-wise or mesh), or the default.
-pub fn method_by_name(
-    name: Option<&str>,
-) -> Result<Box<dyn interslice_interp::Interpolator>, ApiError> {
-    let name = name.unwrap_or(interslice_interp::DEFAULT_METHOD);
-    interslice_interp::by_name(name)
-        .or_else(|e| {
-            interslice_interp::mesh::mesh_methods()
-                .into_iter()
-                .find(|m| m.name() == name)
-                .ok_or(e)
-        })
-        .map_err(ApiError::from)
-}
-
 // ------------------------------------------------------------------ methods, labels
 
 /// One interpolation method.
@@ -148,22 +135,12 @@ pub struct MethodInfo {
 }
 
 async fn methods() -> Json<Vec<MethodInfo>> {
-    let mut all: Vec<MethodInfo> = interslice_interp::methods()
-        .iter()
-        .map(|m| MethodInfo {
-            name: m.name().to_string(),
-            description: m.description().to_string(),
-        })
-        .collect();
-    for m in interslice_interp::mesh::mesh_methods() {
-        if !all.iter().any(|a| a.name == m.name()) {
-            all.push(MethodInfo {
-                name: m.name().to_string(),
-                description: m.description().to_string(),
-            });
-        }
-    }
-    Json(all)
+    Json(
+        interslice_project::methods::method_list()
+            .into_iter()
+            .map(|(name, description)| MethodInfo { name, description })
+            .collect(),
+    )
 }
 
 async fn labels(State(state): State<SharedState>, _a: Auth) -> Result<Response, ApiError> {
@@ -734,11 +711,14 @@ async fn interpolate(
     let st = state.clone();
     let answer = job(&state, move |cancel| {
         let g = c.volume.geometry().clone();
+        let tracing = groundtruth::StoredTracing {
+            store: &st.store,
+            cell: &cell,
+            user_id: me.id,
+        };
         let (mask, drawn) = groundtruth::interpolate_label(
-            &st.store,
+            &tracing,
             &g,
-            &cell,
-            me.id,
             body.label,
             axis,
             method.as_ref(),
@@ -824,28 +804,6 @@ async fn list_results(
     ))
 }
 
-/// A stored result of `cell` that `me` may read (their own, or anyone's for
-/// a reviewer).
-fn readable_result(
-    state: &SharedState,
-    me: &User,
-    cell: &str,
-    id: &str,
-) -> Result<(interslice_store::ResultMeta, interslice_core::Mask), ApiError> {
-    let n: i64 = id
-        .parse()
-        .map_err(|_| ApiError::not_found(format!("no result '{id}'")))?;
-    let (meta, mask) = state
-        .store
-        .result(n)?
-        .filter(|(m, _)| m.cell == cell)
-        .ok_or_else(|| ApiError::not_found(format!("no result {n} on cell '{cell}'")))?;
-    if meta.user_id != me.id && me.role != interslice_store::Role::Reviewer {
-        return Err(ApiError::forbidden("this result is another user's"));
-    }
-    Ok((meta, mask))
-}
-
 async fn result_mesh(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -854,7 +812,7 @@ async fn result_mesh(
     state.cell_path(&cell)?;
     let st = state.clone();
     let body = blocking(move || {
-        let (_, mask) = readable_result(&st, &me, &cell, &result)?;
+        let (_, mask) = readable_result(&st.store, &me, &cell, &result)?;
         let mesh = interslice_interp::mesh::mask_surface(&mask);
         let vertices: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
@@ -887,135 +845,6 @@ struct ExportQuery {
     label: Option<u16>,
 }
 
-/// The bytes of an export: a label volume file or the contours JSON.
-#[allow(clippy::too_many_arguments)]
-pub fn export_bytes(
-    state: &SharedState,
-    cell: &str,
-    geometry: &Geometry,
-    user: &User,
-    format: &str,
-    method: Option<&str>,
-    label: Option<u16>,
-    cancel: &Cancel,
-) -> Result<(Vec<u8>, String), ApiError> {
-    let base = format!("{cell}-{}", crate::cells::id_of_name(&user.name));
-    if format == "contours" {
-        let text = contours_json(state, cell, geometry, user)?;
-        return Ok((text.into_bytes(), format!("{base}.contours.json")));
-    }
-    let ext = volume_extension(format)?;
-    let m = method_by_name(method)?;
-    let labels = groundtruth::label_volume(
-        &state.store,
-        geometry,
-        cell,
-        user.id,
-        m.as_ref(),
-        label,
-        cancel,
-    )?;
-    let name = format!("{base}.{ext}");
-    let bytes = label_file_bytes(state, &labels, &name)?;
-    Ok((bytes, name))
-}
-
-/// A stored interpolation result as a label volume file (its label's value
-/// inside the mask).
-fn result_bytes(
-    state: &SharedState,
-    me: &User,
-    cell: &str,
-    id: &str,
-    format: &str,
-) -> Result<(Vec<u8>, String), ApiError> {
-    let ext = volume_extension(format)?;
-    let (meta, mask) = readable_result(state, me, cell, id)?;
-    let data = mask
-        .data()
-        .iter()
-        .map(|&b| if b { meta.label } else { 0 })
-        .collect();
-    let labels = LabelVolume::from_vec(mask.geometry().clone(), data)?;
-    let name = format!("{cell}-result-{}.{ext}", meta.id);
-    Ok((label_file_bytes(state, &labels, &name)?, name))
-}
-
-/// The extension of a label volume export format, or 400.
-fn volume_extension(format: &str) -> Result<&str, ApiError> {
-    match format {
-        "nii.gz" | "nii" | "nrrd" | "seg.nrrd" | "tiff" | "tif" | "mha" => Ok(format),
-        other => Err(ApiError::bad_request(format!(
-            "unknown export format '{other}' (nii.gz, nii, nrrd, seg.nrrd, mha, tiff or contours)"
-        ))),
-    }
-}
-
-/// The bytes of `labels` written as the file `name` (the writers take paths,
-/// so through a private temporary folder). A `.seg.nrrd` carries the
-/// project's components as its segment table.
-fn label_file_bytes(
-    state: &SharedState,
-    labels: &LabelVolume,
-    name: &str,
-) -> Result<Vec<u8>, ApiError> {
-    let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
-    let path = dir.path().join(name);
-    if interslice_io::segmentation::is_seg_nrrd(&path) {
-        let components = state.store.components()?;
-        interslice_io::segmentation::write_segmentation(&path, labels, &components)?;
-    } else {
-        interslice_io::write_labels(&path, labels)?;
-    }
-    std::fs::read(&path).map_err(|e| ApiError::internal(e.to_string()))
-}
-
-/// The user's contours of a cell in the contours file format.
-pub fn contours_json(
-    state: &SharedState,
-    cell: &str,
-    geometry: &Geometry,
-    user: &User,
-) -> Result<String, ApiError> {
-    use interslice_core::contour_file::{ContourFile, DrawnEmpty, LabelInfo};
-    let stored = state.store.contours(&ContourQuery {
-        cell: cell.to_string(),
-        user_id: user.id,
-        ..Default::default()
-    })?;
-    let mut empty = Vec::new();
-    for (label, axis, _) in state.store.drawn_labels(cell, user.id)? {
-        for d in state.store.drawn(cell, user.id, label, axis)? {
-            if d.empty {
-                empty.push(DrawnEmpty {
-                    slice: interslice_core::SliceRef {
-                        axis,
-                        index: d.index,
-                    },
-                    label,
-                    author: user.name.clone(),
-                });
-            }
-        }
-    }
-    let file = ContourFile {
-        geometry: geometry.clone(),
-        labels: state
-            .store
-            .labels()?
-            .into_iter()
-            .map(|l| LabelInfo {
-                id: l.id,
-                name: l.name,
-                color: l.color,
-            })
-            .collect(),
-        contours: groundtruth::to_core(&stored),
-        drawn_empty: empty,
-    };
-    Ok(interslice_core::contour_file::write(&file)?)
-}
-
 async fn export(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -1037,12 +866,12 @@ async fn export(
     let st = state.clone();
     let (bytes, name) = job(&state, move |cancel| {
         if let Some(id) = &q.result {
-            return result_bytes(&st, &me, &cell, id, &format);
+            return Ok(export::result_bytes(&st.store, &me, &cell, id, &format)?);
         }
         if consensus {
             let m = method_by_name(q.method.as_deref())?;
             let g = c.volume.geometry();
-            return crate::consensus::export_bytes(
+            return Ok(interslice_project::consensus::export_bytes(
                 &st.store,
                 &target,
                 &cell,
@@ -1051,10 +880,10 @@ async fn export(
                 m.as_ref(),
                 q.label,
                 cancel,
-            );
+            )?);
         }
-        export_bytes(
-            &st,
+        Ok(export::export_bytes(
+            &st.store,
             &cell,
             c.volume.geometry(),
             &target,
@@ -1062,7 +891,7 @@ async fn export(
             q.method.as_deref(),
             q.label,
             cancel,
-        )
+        )?)
     })
     .await?;
     let mut resp = bytes.into_response();
@@ -1160,7 +989,7 @@ fn resolve_source(
         let m = method_by_name(method)?;
         if u.eq_ignore_ascii_case(interslice_store::CONSENSUS) {
             // The STAPLE consensus of everyone's tracing (reviewers only).
-            return Ok(Arc::new(crate::consensus::consensus_for(
+            return Ok(Arc::new(interslice_project::consensus::consensus_for(
                 &state.store,
                 me,
                 geometry,
@@ -1171,7 +1000,7 @@ fn resolve_source(
             )?));
         }
         let target = reader_target(state, me, Some(u))?;
-        return state.gt_cache.get(
+        return Ok(state.gt_cache.get(
             &state.store,
             geometry,
             cell,
@@ -1179,7 +1008,7 @@ fn resolve_source(
             m.as_ref(),
             Some(label),
             cancel,
-        );
+        )?);
     }
     let v = if let Some(p) = &src.path {
         let rel = safe_relative_path(p)?;

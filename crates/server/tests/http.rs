@@ -264,7 +264,7 @@ fn trace_reload_interpolate_export_evaluate() {
     expect(&exp, 200);
     let exported = read_export(&exp.body, "e.nii.gz");
     assert_eq!(exported.geometry().dims, DIMS);
-    let core = interslice_server::groundtruth::to_core(&after);
+    let core = interslice_project::groundtruth::to_core(&after);
     let raster = interslice_core::raster::contours_to_mask(exported.geometry(), &core, 1).unwrap();
     let mut on_drawn = exported.clone();
     let mut truth = exported.clone();
