@@ -1,8 +1,8 @@
 //! `interslice serve`, `user`, `export` and `demo` as a user runs them, and the
 //! durability of the annotation database: the server process is killed with
 //! SIGKILL while clients write contours, then restarted.
-use interslice_server::client::Client;
 use interslice_store::Store;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader};
@@ -58,7 +58,7 @@ impl Drop for Served {
 
 fn project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    interslice_server::loadtest::write_cells(dir.path(), 1, [32, 32, 24], false).unwrap();
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [32, 32, 24], false).unwrap();
     dir
 }
 

@@ -189,7 +189,7 @@ fn simulated_campaign_report() {
     let mut config = interslice_server::Config::new(&dir);
     config.bind = "127.0.0.1:0".parse().unwrap();
     let server = interslice_server::spawn(config).unwrap();
-    let mut rev = interslice_server::client::Client::new(&server.url());
+    let mut rev = interslice_test_support::client::Client::new(&server.url());
     assert_eq!(rev.login("rev", None).unwrap().status, 200);
     let ev = rev
         .json(

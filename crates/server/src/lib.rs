@@ -19,12 +19,10 @@
 pub mod api;
 pub mod auth;
 pub mod cell_cache;
-pub mod client;
 pub mod error;
 pub mod host;
 pub mod jobs;
 pub mod limits;
-pub mod loadtest;
 pub mod openapi;
 pub mod web;
 

@@ -5,8 +5,8 @@ mod common;
 
 use common::*;
 use interslice_core::{Axis, LabelVolume, metrics};
-use interslice_server::client::Client;
 use interslice_store::StoredContour;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::time::Duration;
 
@@ -499,13 +499,14 @@ fn openapi_document_lists_every_route() {
 /// The load test, short: 20 clients for 3 s; nothing lost or crossed.
 #[test]
 fn concurrent_clients_lose_and_cross_nothing() {
-    let report = interslice_server::loadtest::run(&interslice_server::loadtest::LoadConfig {
-        clients: 20,
-        duration: Duration::from_secs(3),
-        cells: 4,
-        size: 32,
-    })
-    .unwrap();
+    let report =
+        interslice_test_support::loadtest::run(&interslice_test_support::loadtest::LoadConfig {
+            clients: 20,
+            duration: Duration::from_secs(3),
+            cells: 4,
+            size: 32,
+        })
+        .unwrap();
     eprint!("{report}");
     assert!(report.clean(), "{report}");
     assert!(report.acknowledged_writes > 100, "{report}");

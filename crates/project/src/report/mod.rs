@@ -7,6 +7,20 @@ use std::path::Path;
 pub mod study;
 pub mod variability;
 
+/// Colours of the plots' lines and dots: the colour-blind safe Okabe-Ito
+/// palette (blue, vermillion, green, purple, orange, sky blue), then black
+/// and yellow.
+pub(crate) const COLOURS: &[(u8, u8, u8)] = &[
+    (0, 114, 178),
+    (213, 94, 0),
+    (0, 158, 115),
+    (204, 121, 167),
+    (230, 159, 0),
+    (86, 180, 233),
+    (0, 0, 0),
+    (240, 228, 66),
+];
+
 /// Write `text` to `path` atomically (temporary file, then rename).
 pub fn write_text(path: &Path, text: &str) -> Result<(), ProjectError> {
     use std::io::Write as _;

@@ -204,18 +204,6 @@ fn json(ctx: &StudyReport<'_>) -> Result<String, ProjectError> {
     serde_json::to_string_pretty(&v).map_err(|e| ProjectError::internal(e.to_string()))
 }
 
-/// Line colours of the plots (colour-blind safe, Okabe-Ito), then grey.
-const COLOURS: &[(u8, u8, u8)] = &[
-    (0, 114, 178),
-    (213, 94, 0),
-    (0, 158, 115),
-    (204, 121, 167),
-    (230, 159, 0),
-    (86, 180, 233),
-    (0, 0, 0),
-    (240, 228, 66),
-];
-
 /// One SVG: the metric against the number of skipped slices, a line per method.
 fn plot(
     title: &str,
@@ -259,7 +247,8 @@ fn plot(
         .draw()
         .map_err(|e| err(&e))?;
     for (i, (name, v)) in series.iter().enumerate() {
-        let (r, g, b) = COLOURS.get(i).copied().unwrap_or((128, 128, 128));
+        // Past the palette: grey.
+        let (r, g, b) = super::COLOURS.get(i).copied().unwrap_or((128, 128, 128));
         let colour = RGBColor(r, g, b);
         let pts: Vec<(f64, f64)> = skips
             .iter()

@@ -591,15 +591,8 @@ fn report(
     s
 }
 
-/// Okabe-Ito colours, one per user.
-const COLOURS: &[(u8, u8, u8)] = &[
-    (0, 114, 178),
-    (213, 94, 0),
-    (0, 158, 115),
-    (204, 121, 167),
-    (230, 159, 0),
-    (86, 180, 233),
-];
+/// One Okabe-Ito colour per user (the first six of the palette), then grey.
+const USER_COLOURS: &[(u8, u8, u8)] = super::COLOURS.split_at(6).0;
 
 /// A strip plot: one column per cell, a dot per user, a black cross for the
 /// STAPLE consensus and a grey bar for the exact volume when known.
@@ -674,7 +667,7 @@ fn plot(path: &Path, rows: &[&LabelRow], unit: &str) -> Result<(), ProjectError>
         }
         let k = users.len().max(1) as f64;
         for (ui, u) in users.iter().enumerate() {
-            let (r, g, b) = COLOURS.get(ui).copied().unwrap_or((100, 100, 100));
+            let (r, g, b) = USER_COLOURS.get(ui).copied().unwrap_or((100, 100, 100));
             let colour = RGBColor(r, g, b);
             let dx = (ui as f64 - (k - 1.0) / 2.0) * 0.12;
             let pts: Vec<(f64, f64)> = rows

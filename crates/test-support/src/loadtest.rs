@@ -16,9 +16,9 @@
 //! write must not depend on how much the slice holds. The report ends with
 //! the space the database takes (all pages, the `contours` table, the WAL).
 use crate::client::{Client, quantile};
-use crate::{Config, RunningServer};
 use anyhow::{Context as _, bail};
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
+use interslice_server::{Config, RunningServer};
 use interslice_store::{ContourQuery, SpaceUsage};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -470,7 +470,7 @@ pub fn run_preloaded(cfg: &LoadConfig, preload: usize) -> anyhow::Result<LoadRep
     write_cells(dir.path(), cfg.cells, [cfg.size; 3], false)?;
     let mut config = Config::new(dir.path());
     config.bind = std::net::SocketAddr::from(([127, 0, 0, 1], 0));
-    let server: RunningServer = crate::spawn(config)?;
+    let server: RunningServer = interslice_server::spawn(config)?;
     let base = server.url();
     let cell_ids: Vec<String> = server
         .state
