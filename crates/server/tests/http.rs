@@ -439,7 +439,7 @@ fn openapi_document_lists_every_route() {
     }
 
     // The routes as the router declares them in the source.
-    let src = include_str!("../src/api.rs");
+    let src = include_str!("../src/api/mod.rs");
     let mut declared = Vec::new();
     let body = &src[src.find("pub fn router()").unwrap()..];
     let body = &body[..body.find("\n}\n").unwrap()];
