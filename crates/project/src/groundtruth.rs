@@ -265,22 +265,19 @@ impl GtCache {
         }
     }
 
-    /// The cached or newly computed label volume of a user.
-    #[allow(clippy::too_many_arguments)]
+    /// The cached or newly computed label volume of a user's tracing.
     pub fn get(
         &self,
-        store: &Store,
+        tracing: &StoredTracing<'_>,
         geometry: &Geometry,
-        cell: &str,
-        user_id: i64,
         method: &dyn Interpolator,
         only_label: Option<u16>,
         cancel: &Cancel,
     ) -> Result<Arc<LabelVolume>, ProjectError> {
-        let rev = store.revision(cell, user_id)?;
+        let rev = tracing.store.revision(tracing.cell, tracing.user_id)?;
         let key: GtKey = (
-            cell.to_string(),
-            user_id,
+            tracing.cell.to_string(),
+            tracing.user_id,
             method.name().to_string(),
             only_label,
         );
@@ -292,9 +289,7 @@ impl GtCache {
                 return Ok(v.clone());
             }
         }
-        let v = Arc::new(user_label_volume(
-            store, geometry, cell, user_id, method, only_label, cancel,
-        )?);
+        let v = Arc::new(label_volume(tracing, geometry, method, only_label, cancel)?);
         let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
         entries.retain(|(k, _, _)| *k != key);
         entries.push_back((key, rev, v.clone()));

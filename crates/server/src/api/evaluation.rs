@@ -89,15 +89,14 @@ pub(super) fn resolve_source(
             )?));
         }
         let target = reader_target(state, me, Some(u))?;
-        return Ok(state.gt_cache.get(
-            &state.store,
-            geometry,
+        let tracing = interslice_project::groundtruth::StoredTracing {
+            store: &state.store,
             cell,
-            target.id,
-            m.as_ref(),
-            Some(label),
-            cancel,
-        )?);
+            user_id: target.id,
+        };
+        return Ok(state
+            .gt_cache
+            .get(&tracing, geometry, m.as_ref(), Some(label), cancel)?);
     }
     let v = if let Some(p) = &src.path {
         let rel = safe_relative_path(p)?;
