@@ -4,16 +4,20 @@
 //! export` both answer with these bytes.
 use crate::cells::id_of_name;
 use crate::error::ProjectError;
-use crate::groundtruth::{to_core, user_label_volume};
+use crate::groundtruth::{GtCache, StoredTracing, label_volume, to_core};
 use crate::methods::method_by_name;
 use interslice_core::{Cancel, Geometry, LabelVolume, Mask};
 use interslice_store::{ContourQuery, ResultMeta, Role, Store, User};
+use std::sync::Arc;
 
 /// The bytes of an export: a label volume file or the contours JSON, and
-/// the file name (`<cell>-<user>.<ext>`).
+/// the file name (`<cell>-<user>.<ext>`). With a `cache` the label volume
+/// comes from it (the one the server's evaluations and overlays use, valid
+/// while the tracing is unchanged), else it is computed.
 #[allow(clippy::too_many_arguments)]
 pub fn export_bytes(
     store: &Store,
+    cache: Option<&GtCache>,
     cell: &str,
     geometry: &Geometry,
     user: &User,
@@ -29,7 +33,15 @@ pub fn export_bytes(
     }
     let ext = volume_extension(format)?;
     let m = method_by_name(method)?;
-    let labels = user_label_volume(store, geometry, cell, user.id, m.as_ref(), label, cancel)?;
+    let tracing = StoredTracing {
+        store,
+        cell,
+        user_id: user.id,
+    };
+    let labels = match cache {
+        Some(c) => c.get(&tracing, geometry, m.as_ref(), label, cancel)?,
+        None => Arc::new(label_volume(&tracing, geometry, m.as_ref(), label, cancel)?),
+    };
     let name = format!("{base}.{ext}");
     let bytes = label_file_bytes(store, &labels, &name)?;
     Ok((bytes, name))

@@ -57,6 +57,7 @@ pub(super) async fn export(
         }
         Ok(interslice_project::export::export_bytes(
             &st.store,
+            Some(&st.gt_cache),
             &cell,
             c.volume.geometry(),
             &target,
