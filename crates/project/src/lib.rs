@@ -15,6 +15,7 @@ pub mod error;
 pub mod export;
 pub mod groundtruth;
 pub mod methods;
+pub mod previews;
 pub mod project_file;
 pub mod report;
 

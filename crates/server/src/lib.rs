@@ -95,6 +95,8 @@ pub struct AppState {
     pub auth_required: bool,
     /// Interpolated ground truths, for overlays and evaluation.
     pub gt_cache: interslice_project::groundtruth::GtCache,
+    /// Live previews of interpolations, in memory per user.
+    pub previews: interslice_project::previews::PreviewCache,
     /// Running computations; cancelled on shutdown.
     pub jobs: Arc<jobs::Jobs>,
     /// Which `Host` names are answered.
@@ -128,6 +130,7 @@ impl AppState {
             cache: cell_cache::CellCache::new(config.cache_cells),
             auth_required,
             gt_cache: interslice_project::groundtruth::GtCache::new(4),
+            previews: Default::default(),
             jobs: Arc::new(jobs::Jobs::default()),
             hosts,
         });

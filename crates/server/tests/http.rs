@@ -553,3 +553,50 @@ fn slice_folder_cell_with_16_bit_little_endian_slices() {
     }
     expect(&c.get("/api/cells/stack/slices/z/3").unwrap(), 404);
 }
+
+/// A live preview is kept in memory for its user: a negative id, its mesh
+/// served, no stored result; asking without `preview` stores the result.
+#[test]
+fn previews_stay_in_memory_and_results_are_stored_when_asked() {
+    let dir = common::project();
+    let server = common::serve(common::config(dir.path()));
+    let mut alice = common::signed_in(&server, "alice");
+    for k in [6, 14] {
+        let body = json!({"label": 1, "axis": "z", "index": k, "points": common::circle(16.0, 14.0, 6.0, 24)});
+        expect(
+            &alice
+                .json("POST", "/api/cells/cell_01/contours", &body)
+                .unwrap(),
+            201,
+        );
+    }
+    let ask = |c: &mut Client, preview: bool| {
+        let body = json!({"label": 1, "axis": "z", "method": "linear", "preview": preview});
+        let a = c
+            .json("POST", "/api/cells/cell_01/interpolate", &body)
+            .unwrap();
+        expect(&a, 200);
+        a.json()
+    };
+    let preview = ask(&mut alice, true);
+    let id = preview["result_id"].as_i64().unwrap();
+    assert!(id < 0, "{id}");
+    let results = alice.get("/api/cells/cell_01/results").unwrap().json();
+    assert_eq!(results.as_array().unwrap().len(), 0, "nothing stored");
+    let mesh = alice
+        .get(&format!("/api/cells/cell_01/results/{id}/mesh"))
+        .unwrap();
+    expect(&mesh, 200);
+    assert!(!mesh.json()["indices"].as_array().unwrap().is_empty());
+    let bob = common::signed_in(&server, "bob");
+    expect(
+        &bob.get(&format!("/api/cells/cell_01/results/{id}/mesh"))
+            .unwrap(),
+        404,
+    );
+    let stored = ask(&mut alice, false);
+    assert!(stored["result_id"].as_i64().unwrap() > 0);
+    assert_eq!(stored["voxels"], preview["voxels"]);
+    let results = alice.get("/api/cells/cell_01/results").unwrap().json();
+    assert_eq!(results.as_array().unwrap().len(), 1);
+}

@@ -11,6 +11,11 @@ pub struct InterpolateBody {
     /// Method name (default first in `/api/methods`).
     #[serde(default)]
     pub method: Option<String>,
+    /// A live preview: kept in memory for this user (a negative `result_id`,
+    /// its mesh served while it is among their latest previews), not stored
+    /// as a result.
+    #[serde(default)]
+    pub preview: bool,
 }
 
 /// One slice of the preview.
@@ -72,9 +77,6 @@ pub(super) async fn interpolate(
             cancel,
         )?;
         let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
-        let result_id =
-            st.store
-                .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?;
         let (w, h) = mask.slice_shape(axis);
         use rayon::prelude::*;
         let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
@@ -88,6 +90,14 @@ pub(super) async fn interpolate(
                 }
             })
             .collect();
+        // A preview lives in memory; an asked-for result is stored.
+        let result_id = if body.preview {
+            st.previews
+                .insert(me.id, &cell, body.label, axis, method.name(), mask)
+        } else {
+            st.store
+                .save_result(&cell, me.id, body.label, axis, method.name(), &mask)?
+        };
         Ok(InterpolateAnswer {
             result_id,
             method: method.name().to_string(),
@@ -159,7 +169,18 @@ pub(super) async fn result_mesh(
     state.cell_path(&cell)?;
     let st = state.clone();
     let body = blocking(move || {
-        let (_, mask) = readable_result(&st.store, &me, &cell, &result)?;
+        let mask = match result.parse::<i64>() {
+            Ok(id) if id < 0 => st
+                .previews
+                .get(me.id, &cell, id)
+                .map(|p| p.mask)
+                .ok_or_else(|| {
+                    ApiError::not_found(format!(
+                        "no preview {id} on cell '{cell}' (kept: the latest)"
+                    ))
+                })?,
+            _ => Arc::new(readable_result(&st.store, &me, &cell, &result)?.1),
+        };
         let mesh = interslice_interp::mesh::mask_surface(&mask);
         let vertices: Vec<f64> = mesh.vertices.iter().flatten().copied().collect();
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
