@@ -146,6 +146,12 @@ impl AppState {
         Ok(())
     }
 
+    /// The ids of the cells found at the last scan, in order.
+    pub fn cell_ids(&self) -> Vec<String> {
+        let cells = self.cells.read().unwrap_or_else(|e| e.into_inner());
+        cells.keys().cloned().collect()
+    }
+
     /// The path of a cell, or 400 for an unsafe id and 404 for an unknown one.
     pub fn cell_path(&self, id: &str) -> Result<PathBuf, error::ApiError> {
         let cells = self.cells.read().unwrap_or_else(|e| e.into_inner());

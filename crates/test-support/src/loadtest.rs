@@ -472,14 +472,7 @@ pub fn run_preloaded(cfg: &LoadConfig, preload: usize) -> anyhow::Result<LoadRep
     config.bind = std::net::SocketAddr::from(([127, 0, 0, 1], 0));
     let server: RunningServer = interslice_server::spawn(config)?;
     let base = server.url();
-    let cell_ids: Vec<String> = server
-        .state
-        .cells
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .keys()
-        .cloned()
-        .collect();
+    let cell_ids = server.state.cell_ids();
     // Clients sharing a cell take interleaved slices, so no two share one.
     let per_cell = cfg.clients.div_ceil(cfg.cells);
     let barrier = Arc::new(Barrier::new(cfg.clients + 1));

@@ -83,13 +83,7 @@ pub(super) async fn list_cells(
             .map_err(|e| ApiError::internal(format!("{e:#}")))
     })
     .await?;
-    let ids: Vec<String> = state
-        .cells
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .keys()
-        .cloned()
-        .collect();
+    let ids = state.cell_ids();
     let statuses = state.store.statuses(user.id)?;
     let mut out = Vec::new();
     for id in ids {
