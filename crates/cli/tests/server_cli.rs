@@ -1,8 +1,8 @@
 //! `interslice serve`, `user`, `export` and `demo` as a user runs them, and the
 //! durability of the annotation database: the server process is killed with
 //! SIGKILL while clients write contours, then restarted.
-use interslice_server::client::Client;
 use interslice_store::Store;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader};
@@ -58,7 +58,7 @@ impl Drop for Served {
 
 fn project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    interslice_server::loadtest::write_cells(dir.path(), 1, [32, 32, 24], false).unwrap();
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [32, 32, 24], false).unwrap();
     dir
 }
 
@@ -369,4 +369,114 @@ fn demo_writes_cells_and_their_truth() {
         interslice_server::AppState::open(&interslice_server::Config::new(&project)).unwrap();
     let ids: Vec<String> = state.cells.read().unwrap().keys().cloned().collect();
     assert_eq!(ids, ["cell_001", "cell_002"]);
+}
+
+/// A circle of radius `r` around (`cu`, `cv`) on a slice, 24 points.
+fn circle(cu: f64, cv: f64, r: f64) -> Vec<[f64; 2]> {
+    (0..24)
+        .map(|n| {
+            let t = n as f64 / 24.0 * std::f64::consts::TAU;
+            [cu + r * t.cos(), cv + r * t.sin()]
+        })
+        .collect()
+}
+
+#[test]
+fn a_contours_file_interpolates_to_the_same_labels_through_the_cli_and_the_server() {
+    use interslice_core::contour_file::{ContourFile, DrawnEmpty, default_labels};
+    use interslice_core::{Axis, Contour, SliceRef};
+    let dir = project();
+    let cell = dir.path().join("cell_01.nii");
+    let geometry = interslice_io::read_volume(&cell)
+        .unwrap()
+        .geometry()
+        .clone();
+    // Each label has its own drawn slices: the cell (1) on z = 4, 12, 20,
+    // the nucleus (2) on z = 8, 14 and drawn empty on z = 18, a nucleolus
+    // (3) across x = 12, 18. A slice drawn for one label says nothing about
+    // the others.
+    let slice = |axis, index| SliceRef { axis, index };
+    let traced = |s, label, points| Contour::new(s, label, points, "alice", "2026-01-01T00:00:00Z");
+    let mut contours = Vec::new();
+    for (k, r) in [(4, 6.0), (12, 9.0), (20, 5.0)] {
+        contours.push(traced(slice(Axis::Z, k), 1, circle(16.0, 16.0, r)));
+    }
+    for (k, r) in [(8, 4.0), (14, 4.5)] {
+        contours.push(traced(slice(Axis::Z, k), 2, circle(16.0, 16.0, r)));
+    }
+    for (i, r) in [(12, 2.0), (18, 2.5)] {
+        contours.push(traced(slice(Axis::X, i), 3, circle(20.0, 16.0, r)));
+    }
+    let file = ContourFile {
+        geometry,
+        labels: default_labels(),
+        contours: contours.clone(),
+        drawn_empty: vec![DrawnEmpty {
+            slice: slice(Axis::Z, 18),
+            label: 2,
+            author: "alice".into(),
+        }],
+    };
+    let out = tempfile::tempdir().unwrap();
+    let json_path = out.path().join("tracing.contours.json");
+    std::fs::write(
+        &json_path,
+        interslice_core::contour_file::write(&file).unwrap(),
+    )
+    .unwrap();
+
+    // The CLI, straight from the file.
+    let cli = out.path().join("cli.nii.gz");
+    let o = Command::new(BIN)
+        .arg("interpolate")
+        .arg(&json_path)
+        .args(["--method", "linear", "--out"])
+        .arg(&cli)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    // The server, the same contours traced through the API.
+    let mut config = interslice_server::Config::new(dir.path());
+    config.bind = std::net::SocketAddr::from(([127, 0, 0, 1], 0));
+    let server = interslice_server::spawn(config).unwrap();
+    let mut c = Client::new(&server.url());
+    assert_eq!(c.login("alice", None).unwrap().status, 200);
+    for ct in &contours {
+        let body = json!({
+            "label": ct.label, "axis": ct.slice.axis.to_string(),
+            "index": ct.slice.index, "points": ct.points,
+        });
+        let a = c
+            .json("POST", "/api/cells/cell_01/contours", &body)
+            .unwrap();
+        assert_eq!(a.status, 201);
+    }
+    let e = c
+        .json(
+            "POST",
+            "/api/cells/cell_01/slices/z/18/empty",
+            &json!({"label": 2}),
+        )
+        .unwrap();
+    assert_eq!(e.status, 200);
+    let http = c
+        .get("/api/cells/cell_01/export?format=nii.gz&method=linear")
+        .unwrap();
+    assert_eq!(http.status, 200);
+    drop(server);
+    let web = out.path().join("web.nii.gz");
+    std::fs::write(&web, &http.body).unwrap();
+
+    let a = interslice_io::read_labels(&cli).unwrap();
+    let b = interslice_io::read_labels(&web).unwrap();
+    assert_eq!(a.geometry(), b.geometry());
+    assert_eq!(a.data(), b.data(), "voxel for voxel");
+    // The nucleus fills the slices between its own drawn ones (z = 12 is
+    // drawn only for the cell) and is gone where it was drawn empty.
+    let at = |i: usize, j: usize, k: usize| a.data()[i + 32 * (j + 32 * k)];
+    assert_eq!(at(16, 16, 12), 2);
+    assert_eq!(at(16, 16, 11), 2);
+    assert_eq!(at(16, 16, 18), 1);
+    assert!(a.data().contains(&3));
 }

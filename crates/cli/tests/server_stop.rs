@@ -1,7 +1,7 @@
 //! `interslice serve` stops on SIGTERM within seconds even while a request
 //! computes: the signal cancels the running work instead of waiting for it.
 #![cfg(unix)]
-use interslice_server::client::Client;
+use interslice_test_support::client::Client;
 use std::io::{BufRead, BufReader, Write as _};
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
@@ -13,7 +13,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_interslice");
 fn sigterm_stops_the_server_while_a_request_computes() {
     let dir = tempfile::tempdir().unwrap();
     // 192³ smoothed with σ = 20 voxels: many seconds of work in a test build.
-    interslice_server::loadtest::write_cells(dir.path(), 1, [192, 192, 192], false).unwrap();
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [192, 192, 192], false).unwrap();
     let mut child = Command::new(BIN)
         .arg("serve")
         .arg(dir.path())

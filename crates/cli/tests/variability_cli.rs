@@ -145,9 +145,9 @@ fn simulated_campaign_report() {
         .unwrap()
         .geometry()
         .clone();
-    let method = interslice_server::api::method_by_name(None).unwrap();
+    let method = interslice_project::methods::method_by_name(None).unwrap();
     let reviewer = store.upsert_user("rev", Role::Reviewer, None).unwrap();
-    let (bytes, name) = interslice_server::consensus::export_bytes(
+    let (bytes, name) = interslice_project::consensus::export_bytes(
         &store,
         &reviewer,
         "cell_001",
@@ -166,7 +166,7 @@ fn simulated_campaign_report() {
         interslice_io::read_labels(&out.join("consensus/cell_001_consensus.nii.gz")).unwrap()
     );
     let tracer = store.user("tracer-a").unwrap().unwrap();
-    let e = interslice_server::consensus::export_bytes(
+    let e = interslice_project::consensus::export_bytes(
         &store,
         &tracer,
         "cell_001",
@@ -177,7 +177,10 @@ fn simulated_campaign_report() {
         &interslice_core::Cancel::new(),
     )
     .unwrap_err();
-    assert_eq!(e.status.as_u16(), 403);
+    assert_eq!(
+        interslice_server::error::ApiError::from(e).status.as_u16(),
+        403
+    );
 
     // Through the HTTP API: the nucleus of tracer-a evaluated against the
     // consensus (whole structures on both sides) has the report's Dice, and
@@ -186,7 +189,7 @@ fn simulated_campaign_report() {
     let mut config = interslice_server::Config::new(&dir);
     config.bind = "127.0.0.1:0".parse().unwrap();
     let server = interslice_server::spawn(config).unwrap();
-    let mut rev = interslice_server::client::Client::new(&server.url());
+    let mut rev = interslice_test_support::client::Client::new(&server.url());
     assert_eq!(rev.login("rev", None).unwrap().status, 200);
     let ev = rev
         .json(

@@ -4,7 +4,7 @@
 //! Target: p99 under 5 ms for both.
 //!
 //! `cargo bench -p interslice-server --bench latency [-- REQUESTS]`
-use interslice_server::client::{Client, quantile};
+use interslice_test_support::client::{Client, quantile};
 use std::time::Instant;
 
 fn report(what: &str, mut ms: Vec<f64>) -> bool {
@@ -28,7 +28,7 @@ fn main() -> anyhow::Result<()> {
         .find_map(|a| a.parse().ok())
         .unwrap_or(3000);
     let dir = tempfile::tempdir()?;
-    interslice_server::loadtest::write_cells(dir.path(), 1, [512, 512, 16], true)?;
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [512, 512, 16], true)?;
     let mut config = interslice_server::Config::new(dir.path());
     config.bind = std::net::SocketAddr::from(([127, 0, 0, 1], 0));
     let server = interslice_server::spawn(config)?;

@@ -104,6 +104,29 @@ impl From<interslice_io::IoError> for ApiError {
     }
 }
 
+/// A project error answered: invalid 400, not found 404, forbidden 403, the
+/// wrapped errors as they map on their own.
+impl From<interslice_project::ProjectError> for ApiError {
+    fn from(e: interslice_project::ProjectError) -> ApiError {
+        use interslice_project::ProjectError as P;
+        match e {
+            P::Invalid(m) => ApiError::bad_request(m),
+            P::NotFound(m) => ApiError::not_found(m),
+            P::Forbidden(m) => ApiError::forbidden(m),
+            P::Internal(m) => ApiError::internal(m),
+            P::Store(e) => e.into(),
+            P::Core(e) => e.into(),
+            P::Interp(e) => e.into(),
+            P::Io(e) => e.into(),
+            P::File(e) => ApiError::internal(e.to_string()),
+            P::Context { context, cause } => {
+                let message = format!("{context}: {cause}");
+                ApiError::new(ApiError::from(*cause).status, message)
+            }
+        }
+    }
+}
+
 impl From<tokio::task::JoinError> for ApiError {
     fn from(e: tokio::task::JoinError) -> ApiError {
         ApiError::internal(format!("internal error: {e}"))

@@ -3,7 +3,7 @@
 //!
 //! A project folder holds the cells (volume files or folders of slices); the
 //! database lives at `DIR/.interslice/annotations.sqlite`. Volumes are read
-//! lazily and kept in a small LRU ([`cells::CellCache`]); slices are served as
+//! lazily and kept in a small LRU ([`cell_cache::CellCache`]); slices are served as
 //! raw little-endian bytes straight from memory.
 //!
 //! Users: on a loopback bind a name is enough (the user is created on first
@@ -18,21 +18,17 @@
 
 pub mod api;
 pub mod auth;
-pub mod cells;
-pub mod client;
-pub mod consensus;
+pub mod cell_cache;
 pub mod error;
-pub mod groundtruth;
 pub mod host;
 pub mod jobs;
 pub mod limits;
-pub mod loadtest;
 pub mod openapi;
-pub mod project_file;
 pub mod web;
 
 use anyhow::Context as _;
 use axum::Router;
+use interslice_project::cells::LoadedCell;
 use interslice_store::Store;
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
@@ -94,11 +90,13 @@ pub struct AppState {
     /// Cells found in the folder, by id.
     pub cells: RwLock<BTreeMap<String, PathBuf>>,
     /// Loaded volumes.
-    pub cache: cells::CellCache,
+    pub cache: cell_cache::CellCache,
     /// Whether passwords are required.
     pub auth_required: bool,
     /// Interpolated ground truths, for overlays and evaluation.
-    pub gt_cache: groundtruth::GtCache,
+    pub gt_cache: interslice_project::groundtruth::GtCache,
+    /// Live previews of interpolations, in memory per user.
+    pub previews: interslice_project::previews::PreviewCache,
     /// Running computations; cancelled on shutdown.
     pub jobs: Arc<jobs::Jobs>,
     /// Which `Host` names are answered.
@@ -112,26 +110,8 @@ impl AppState {
     /// Open the database and register the cells of `config.dir`.
     pub fn open(config: &Config) -> anyhow::Result<SharedState> {
         let dir = config.dir.clone();
-        if !dir.is_dir() {
-            anyhow::bail!("{} is not a folder", dir.display());
-        }
-        let db = config
-            .db
-            .clone()
-            .unwrap_or_else(|| interslice_store::default_db_path(&dir));
-        let store = Store::open(&db).with_context(|| format!("cannot open {}", db.display()))?;
-        let components = match &config.components {
-            Some(c) => {
-                project_file::write_components(&dir, c)?;
-                Some(c.clone())
-            }
-            None => project_file::read_components(&dir)?,
-        };
-        if let Some(c) = &components {
-            store
-                .sync_components(c)
-                .context("cannot set the project's components")?;
-        }
+        let store =
+            interslice_project::open_store(&dir, config.db.as_deref(), config.components.as_ref())?;
         let auth_required = config.require_login || !config.bind.ip().is_loopback();
         let extra = config
             .public_urls
@@ -147,9 +127,10 @@ impl AppState {
             dir,
             store: Arc::new(store),
             cells: RwLock::new(BTreeMap::new()),
-            cache: cells::CellCache::new(config.cache_cells),
+            cache: cell_cache::CellCache::new(config.cache_cells),
             auth_required,
-            gt_cache: groundtruth::GtCache::new(4),
+            gt_cache: interslice_project::groundtruth::GtCache::new(4),
+            previews: Default::default(),
             jobs: Arc::new(jobs::Jobs::default()),
             hosts,
         });
@@ -159,44 +140,32 @@ impl AppState {
 
     /// Re-read the folder's cells and register new ones in the database.
     pub fn rescan(&self) -> anyhow::Result<()> {
-        let found = cells::scan(&self.dir)?;
-        // Only new or moved cells are written: listing the cells is frequent
-        // and must not cost a write transaction per cell.
         let known = self.cells.read().unwrap_or_else(|e| e.into_inner()).clone();
-        for (id, path) in &found {
-            if known.get(id) == Some(path) {
-                continue;
-            }
-            let rel = path.strip_prefix(&self.dir).unwrap_or(path);
-            self.store.upsert_cell(id, &rel.to_string_lossy())?;
-        }
+        let found = interslice_project::register_cells(&self.store, &self.dir, &known)?;
         *self.cells.write().unwrap_or_else(|e| e.into_inner()) = found;
         Ok(())
     }
 
+    /// The ids of the cells found at the last scan, in order.
+    pub fn cell_ids(&self) -> Vec<String> {
+        let cells = self.cells.read().unwrap_or_else(|e| e.into_inner());
+        cells.keys().cloned().collect()
+    }
+
     /// The path of a cell, or 400 for an unsafe id and 404 for an unknown one.
     pub fn cell_path(&self, id: &str) -> Result<PathBuf, error::ApiError> {
-        if !cells::is_safe_id(id) {
-            return Err(error::ApiError::bad_request(format!(
-                "invalid cell id '{id}' (ids are names, never paths)"
-            )));
-        }
-        self.cells
-            .read()
-            .unwrap_or_else(|e| e.into_inner())
-            .get(id)
-            .cloned()
-            .ok_or_else(|| error::ApiError::not_found(format!("unknown cell '{id}'")))
+        let cells = self.cells.read().unwrap_or_else(|e| e.into_inner());
+        Ok(interslice_project::cell_path(&cells, id)?)
     }
 
     /// The loaded volume of a cell.
-    pub async fn cell(&self, id: &str) -> Result<Arc<cells::LoadedCell>, error::ApiError> {
+    pub async fn cell(&self, id: &str) -> Result<Arc<LoadedCell>, error::ApiError> {
         let path = self.cell_path(id)?;
         let store = self.store.clone();
         let cid = id.to_string();
         self.cache
             .get(id, move || {
-                let loaded = cells::LoadedCell::load(&path)?;
+                let loaded = LoadedCell::load(&path)?;
                 // Remember what the cell is; a changed hash means the file was
                 // replaced under existing tracings (kept, but worth a warning).
                 if let Ok(Some(old)) = store.set_cell_content(

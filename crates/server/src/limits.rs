@@ -57,7 +57,7 @@ pub fn upload_name(name: &str) -> Result<PathBuf, ApiError> {
             "the upload name has {n} characters; at most {MAX_UPLOAD_NAME}"
         )));
     }
-    let rel = crate::cells::safe_relative_path(name)?;
+    let rel = interslice_project::cells::safe_relative_path(name)?;
     if rel.components().count() != 1 {
         return Err(ApiError::bad_request(format!(
             "name '{name}' must be a file name, not a path"

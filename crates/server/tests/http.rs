@@ -5,8 +5,8 @@ mod common;
 
 use common::*;
 use interslice_core::{Axis, LabelVolume, metrics};
-use interslice_server::client::Client;
 use interslice_store::StoredContour;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::time::Duration;
 
@@ -264,7 +264,7 @@ fn trace_reload_interpolate_export_evaluate() {
     expect(&exp, 200);
     let exported = read_export(&exp.body, "e.nii.gz");
     assert_eq!(exported.geometry().dims, DIMS);
-    let core = interslice_server::groundtruth::to_core(&after);
+    let core = interslice_project::groundtruth::to_core(&after);
     let raster = interslice_core::raster::contours_to_mask(exported.geometry(), &core, 1).unwrap();
     let mut on_drawn = exported.clone();
     let mut truth = exported.clone();
@@ -439,7 +439,7 @@ fn openapi_document_lists_every_route() {
     }
 
     // The routes as the router declares them in the source.
-    let src = include_str!("../src/api.rs");
+    let src = include_str!("../src/api/mod.rs");
     let mut declared = Vec::new();
     let body = &src[src.find("pub fn router()").unwrap()..];
     let body = &body[..body.find("\n}\n").unwrap()];
@@ -499,13 +499,14 @@ fn openapi_document_lists_every_route() {
 /// The load test, short: 20 clients for 3 s; nothing lost or crossed.
 #[test]
 fn concurrent_clients_lose_and_cross_nothing() {
-    let report = interslice_server::loadtest::run(&interslice_server::loadtest::LoadConfig {
-        clients: 20,
-        duration: Duration::from_secs(3),
-        cells: 4,
-        size: 32,
-    })
-    .unwrap();
+    let report =
+        interslice_test_support::loadtest::run(&interslice_test_support::loadtest::LoadConfig {
+            clients: 20,
+            duration: Duration::from_secs(3),
+            cells: 4,
+            size: 32,
+        })
+        .unwrap();
     eprint!("{report}");
     assert!(report.clean(), "{report}");
     assert!(report.acknowledged_writes > 100, "{report}");
@@ -551,4 +552,51 @@ fn slice_folder_cell_with_16_bit_little_endian_slices() {
         assert_eq!(a.body, want, "{axis}={index}");
     }
     expect(&c.get("/api/cells/stack/slices/z/3").unwrap(), 404);
+}
+
+/// A live preview is kept in memory for its user: a negative id, its mesh
+/// served, no stored result; asking without `preview` stores the result.
+#[test]
+fn previews_stay_in_memory_and_results_are_stored_when_asked() {
+    let dir = common::project();
+    let server = common::serve(common::config(dir.path()));
+    let mut alice = common::signed_in(&server, "alice");
+    for k in [6, 14] {
+        let body = json!({"label": 1, "axis": "z", "index": k, "points": common::circle(16.0, 14.0, 6.0, 24)});
+        expect(
+            &alice
+                .json("POST", "/api/cells/cell_01/contours", &body)
+                .unwrap(),
+            201,
+        );
+    }
+    let ask = |c: &mut Client, preview: bool| {
+        let body = json!({"label": 1, "axis": "z", "method": "linear", "preview": preview});
+        let a = c
+            .json("POST", "/api/cells/cell_01/interpolate", &body)
+            .unwrap();
+        expect(&a, 200);
+        a.json()
+    };
+    let preview = ask(&mut alice, true);
+    let id = preview["result_id"].as_i64().unwrap();
+    assert!(id < 0, "{id}");
+    let results = alice.get("/api/cells/cell_01/results").unwrap().json();
+    assert_eq!(results.as_array().unwrap().len(), 0, "nothing stored");
+    let mesh = alice
+        .get(&format!("/api/cells/cell_01/results/{id}/mesh"))
+        .unwrap();
+    expect(&mesh, 200);
+    assert!(!mesh.json()["indices"].as_array().unwrap().is_empty());
+    let bob = common::signed_in(&server, "bob");
+    expect(
+        &bob.get(&format!("/api/cells/cell_01/results/{id}/mesh"))
+            .unwrap(),
+        404,
+    );
+    let stored = ask(&mut alice, false);
+    assert!(stored["result_id"].as_i64().unwrap() > 0);
+    assert_eq!(stored["voxels"], preview["voxels"]);
+    let results = alice.get("/api/cells/cell_01/results").unwrap().json();
+    assert_eq!(results.as_array().unwrap().len(), 1);
 }

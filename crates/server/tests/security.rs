@@ -5,8 +5,8 @@
 mod common;
 
 use common::*;
-use interslice_server::client::Client;
 use interslice_store::Role;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::net::SocketAddr;
 

@@ -8,8 +8,8 @@ mod common;
 
 use common::*;
 use interslice_server::RunningServer;
-use interslice_server::client::Client;
 use interslice_store::Role;
+use interslice_test_support::client::Client;
 use serde_json::json;
 use std::io::{Read as _, Write as _};
 use std::net::TcpStream;
@@ -187,7 +187,7 @@ fn numbers_and_names_are_bounded_with_the_range_in_the_message() {
 /// A 160³ cell smoothed with σ = 20 voxels: seconds of work in a test build.
 fn slow_project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    interslice_server::loadtest::write_cells(dir.path(), 1, [160, 160, 160], false).unwrap();
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [160, 160, 160], false).unwrap();
     dir
 }
 

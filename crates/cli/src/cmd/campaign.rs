@@ -148,7 +148,7 @@ fn simulate(a: &SimulateArgs) -> Result<()> {
     if let Some(l) = a.labels.iter().find(|l| !known.contains(l)) {
         bail!("label {l} is not one of the project's labels {known:?}");
     }
-    let cells = interslice_server::cells::scan(&a.dir)
+    let cells = interslice_project::cells::scan(&a.dir)
         .with_context(|| format!("listing {}", a.dir.display()))?;
     for n in 1..=u64::from(a.cells) {
         let name = format!("cell_{n:03}");

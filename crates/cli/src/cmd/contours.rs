@@ -84,9 +84,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 fn read_file(path: &Path) -> anyhow::Result<ContourFile> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    contour_file::read(&text).with_context(|| format!("{}", path.display()))
+    Ok(interslice_project::contour_files::read(path)?)
 }
 
 fn rasterize(input: &Path, out: &Path, drawn_out: Option<&Path>, axis: Axis) -> anyhow::Result<()> {

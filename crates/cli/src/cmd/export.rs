@@ -6,7 +6,7 @@
 //! ascending label order. `--out` ending in `.contours.json` writes the user's
 //! contours instead.
 use anyhow::{Context, Result, bail};
-use interslice_server::{AppState, Config};
+use interslice_project::cells::LoadedCell;
 use std::path::PathBuf;
 
 /// Arguments of `export`.
@@ -41,35 +41,33 @@ pub struct Args {
 
 /// Run the command.
 pub fn run(mut a: Args) -> Result<()> {
-    let mut config = Config::new(&a.dir);
-    config.db = a.db.clone();
-    let state = AppState::open(&config)?;
-    let components = state.store.components()?;
+    let store = interslice_project::open_store(&a.dir, a.db.as_deref(), None)?;
+    let cells = interslice_project::register_cells(&store, &a.dir, &Default::default())
+        .context("cannot list the project folder")?;
+    let components = store.components()?;
     a.label = a
         .label_arg
         .as_ref()
         .map(|l| l.resolve_in(&components))
         .transpose()?;
-    let path = state.cell_path(&a.cell)?;
-    let user = state
-        .store
+    let path = interslice_project::cell_path(&cells, &a.cell)?;
+    let user = store
         .user(&a.user)?
         .with_context(|| format!("no user '{}' in this project", a.user))?;
-    let cell = interslice_server::cells::LoadedCell::load(&path)
-        .with_context(|| format!("reading {}", path.display()))?;
+    let cell = LoadedCell::load(&path).with_context(|| format!("reading {}", path.display()))?;
     let geometry = cell.volume.geometry();
     let name = a.out.to_string_lossy().to_ascii_lowercase();
     if name.ends_with(".contours.json") || name.ends_with(".json") {
-        let text = interslice_server::api::contours_json(&state, &a.cell, geometry, &user)?;
+        let text = interslice_project::export::contours_json(&store, &a.cell, geometry, &user)?;
         interslice_io::raw::write_atomic(&a.out, |w| {
             use std::io::Write as _;
             w.write_all(text.as_bytes())
         })
         .with_context(|| format!("writing {}", a.out.display()))?;
     } else {
-        let method = interslice_server::api::method_by_name(a.method.as_deref())?;
-        let labels = interslice_server::groundtruth::label_volume(
-            &state.store,
+        let method = interslice_project::methods::method_by_name(a.method.as_deref())?;
+        let labels = interslice_project::groundtruth::user_label_volume(
+            &store,
             geometry,
             &a.cell,
             user.id,

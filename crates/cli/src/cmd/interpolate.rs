@@ -9,6 +9,13 @@
 //! extension names. With `--image` (an intensity volume on SPARSE's grid) and
 //! no `--method`, the image-guided method is used; `--confidence OUT2` writes
 //! the confidence per voxel (f32 in `[0.5, 1]`).
+//!
+//! SPARSE may also be a contours file (`.json`, `docs/contours-format.md`):
+//! then each label is interpolated from its own traced and drawn-empty
+//! slices, along the axis with most of them, by the function the server's
+//! export uses (`interslice_project::contour_files::interpolate`), so a
+//! tracing gives the same label volume here and from the server. OUT is a
+//! label volume on the file's grid.
 use anyhow::{Context, Result, bail};
 use interslice_core::{AnyVolume, Axis, LabelVolume, Volume};
 use interslice_interp::drawn::{nonempty_slices, parse_drawn};
@@ -23,7 +30,8 @@ use std::sync::Arc;
 /// Arguments of `interpolate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The sparse label volume (drawn slices carry the tracings).
+    /// The sparse label volume (drawn slices carry the tracings), or a
+    /// contours file (.json).
     #[arg(required_unless_present = "list")]
     pub sparse: Option<PathBuf>,
     #[command(flatten)]
@@ -76,10 +84,13 @@ pub fn run(a: Args) -> Result<()> {
         );
         return Ok(());
     }
-    let (Some(sparse_path), Some(out)) = (a.sparse, a.out) else {
+    let (Some(sparse_path), Some(out)) = (a.sparse.clone(), a.out.clone()) else {
         bail!("interpolate needs SPARSE and --out (or --list)");
     };
     let started = std::time::Instant::now();
+    if interslice_project::contour_files::is_contours_file(&sparse_path) {
+        return interpolate_contours(&sparse_path, &out, &a);
+    }
     let input = a
         .series
         .read_volume(&sparse_path)
@@ -125,6 +136,55 @@ pub fn run(a: Args) -> Result<()> {
         method.name(),
         drawn.len(),
         a.axis,
+        started.elapsed().as_secs_f64(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// `interpolate CONTOURS.json --out OUT`: the label volume of a contours file.
+fn interpolate_contours(path: &Path, out: &Path, a: &Args) -> Result<()> {
+    let max_labels = a.max_labels;
+    if a.image.is_some() || a.confidence.is_some() || a.drawn.is_some() {
+        bail!(
+            "--image, --confidence and --drawn apply to label volumes; a contours file \
+             carries its drawn slices and every axis (rasterize it with `contours rasterize` \
+             to use them)"
+        );
+    }
+    let started = std::time::Instant::now();
+    let file = interslice_project::contour_files::read(path)?;
+    let labels: std::collections::BTreeSet<u16> = file
+        .contours
+        .iter()
+        .map(|c| c.label)
+        .chain(file.drawn_empty.iter().map(|d| d.label))
+        .collect();
+    if labels.len() > max_labels {
+        bail!(
+            "{} has {} labels, more than --max-labels {max_labels}",
+            path.display(),
+            labels.len()
+        );
+    }
+    let method = interslice_project::methods::method_by_name(a.method.as_deref())?;
+    let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
+    let name = path.display().to_string();
+    let result = interslice_project::contour_files::interpolate(
+        &file,
+        &name,
+        method.as_ref(),
+        None,
+        &interslice_core::Cancel::new(),
+    )?;
+    interslice_io::write_labels(out, &result)
+        .with_context(|| format!("writing {}", out.display()))?;
+    spin.finish_and_clear();
+    println!(
+        "{}: {} contours of {} label(s), {:.2} s -> {}",
+        method.name(),
+        file.contours.len(),
+        labels.len(),
         started.elapsed().as_secs_f64(),
         out.display()
     );

@@ -102,8 +102,12 @@ pub fn run(a: Args) -> Result<()> {
         "cells": cells,
     });
     let path = a.out.join("phantom.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&manifest)? + "\n")
-        .with_context(|| format!("writing {}", path.display()))?;
+    let text = serde_json::to_string_pretty(&manifest)? + "\n";
+    interslice_io::raw::write_atomic(&path, |w| {
+        use std::io::Write as _;
+        w.write_all(text.as_bytes())
+    })
+    .with_context(|| format!("writing {}", path.display()))?;
     eprintln!(
         "wrote {} cell(s) of {}³ voxels to {}",
         a.count,

@@ -1,34 +1,20 @@
 //! `interslice study GROUND_TRUTH --out DIR [--image IMAGE] [--axis z] [--skips 0..9]
 //! [--methods a,b,...] [--label N]`: the interpolation study of the 2014 paper, on
-//! any fully traced label volume. With `--image` (the intensity volume on the
-//! ground truth's grid) the image-guided method is studied too, next to the
-//! shape-only ones.
-//!
-//! For every number of skipped slices `k`, the drawn slices are the first and
-//! last non-empty slices along the axis and every `(k + 1)`-th slice from the
-//! first; every other slice is erased. Each method interpolates every label of
-//! that sparse volume (each label on its own, as `interpolate` does), and each
-//! studied label of the result is measured against the ground truth with the
-//! core metrics (overlap and border distances). The (method, k) runs go in
-//! parallel.
-//!
-//! DIR receives `results.csv` and `results.json` (one row per method, k and
-//! label), one SVG plot per metric (`dice.svg`, ...: the metric against the
-//! number of skipped slices, one line per method, the mean over the studied
-//! labels) and `summary.md`.
+//! any fully traced label volume (`interslice_project::report::study` measures
+//! each run and writes the report files). With `--image` (the intensity volume
+//! on the ground truth's grid) the image-guided method is studied too, next to
+//! the shape-only ones. The (method, k) runs go in parallel.
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use interslice_core::metrics::{Metrics, evaluate_label};
-use interslice_core::{Axis, LabelVolume};
+use interslice_core::Axis;
 use interslice_interp::drawn::nonempty_slices;
-use interslice_interp::protocol::{drawn_for, sparse_of};
-use interslice_interp::{
-    DEFAULT_METHOD, IMAGE_METHOD, Interpolator, by_name_with_image, interpolate_labels, methods,
+use interslice_interp::{IMAGE_METHOD, Interpolator, by_name_with_image, methods};
+use interslice_project::report::study::{
+    Provenance, Row, StudyReport, measure, phantom_command, write,
 };
 use rayon::prelude::*;
-use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `study`.
@@ -64,33 +50,6 @@ pub struct Args {
     #[arg(long)]
     pub quiet: bool,
 }
-
-/// One measured (method, skip, label).
-#[derive(Debug, Clone, Serialize)]
-pub struct Row {
-    /// Method name.
-    pub method: String,
-    /// Slices skipped between drawn slices.
-    pub skip: usize,
-    /// The label measured.
-    pub label: u16,
-    /// Number of drawn slices.
-    pub drawn: usize,
-    /// Wall time of the interpolation of all labels (s), shared by the rows of one run.
-    pub seconds: f64,
-    /// Every metric of the label.
-    pub metrics: Metrics,
-}
-
-/// The metrics plotted and tabulated: (key, title, higher is better).
-const PLOTTED: &[(&str, &str, bool)] = &[
-    ("dice", "Dice", true),
-    ("jaccard", "Jaccard", true),
-    ("sensitivity", "Sensitivity", true),
-    ("specificity", "Specificity", true),
-    ("hd95", "HD95", false),
-    ("assd", "ASSD", false),
-];
 
 /// Run `study`.
 pub fn run(mut a: Args) -> Result<()> {
@@ -163,7 +122,7 @@ pub fn run(mut a: Args) -> Result<()> {
         .par_iter()
         .map(|&(m, k)| {
             let method = chosen[m].as_ref();
-            let r = run_one(method, &gt, a.axis, first, last, k, &labels, a.tolerance);
+            let r = measure(method, &gt, a.axis, first, last, k, &labels, a.tolerance);
             bar.inc(1);
             bar.set_message(format!("({} k={k})", method.name()));
             r.with_context(|| format!("{} with {k} skipped", method.name()))
@@ -176,7 +135,7 @@ pub fn run(mut a: Args) -> Result<()> {
         rows.extend(r?);
     }
     let names: Vec<&str> = chosen.iter().map(|m| m.name()).collect();
-    let ctx = Context_ {
+    let ctx = StudyReport {
         source: &a.ground_truth,
         provenance: provenance(&a),
         gt: &gt,
@@ -187,22 +146,7 @@ pub fn run(mut a: Args) -> Result<()> {
         rows: &rows,
         seconds: total,
     };
-    write_csv(&a.out.join("results.csv"), &rows)?;
-    write_json(&a.out.join("results.json"), &ctx)?;
-    for &(key, title, _) in PLOTTED {
-        let series = mean_series(&ctx, key);
-        let unit = if matches!(key, "hd95" | "assd") {
-            format!(" ({})", gt.geometry().unit.symbol())
-        } else {
-            String::new()
-        };
-        let path = a.out.join(format!("{key}.svg"));
-        plot(&path, &format!("{title}{unit}"), &series, &skips)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    let md = summary(&ctx);
-    std::fs::write(a.out.join("summary.md"), md)
-        .with_context(|| format!("writing {}", a.out.join("summary.md").display()))?;
+    write(&a.out, &ctx)?;
     eprintln!(
         "study: {} methods x {} skips x {} labels in {total:.1} s, results in {}",
         names.len(),
@@ -238,282 +182,6 @@ pub fn parse_skips(s: &str) -> Result<Vec<usize>> {
         return Err(bad());
     }
     Ok(out)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn run_one(
-    method: &dyn Interpolator,
-    gt: &LabelVolume,
-    axis: Axis,
-    first: usize,
-    last: usize,
-    k: usize,
-    labels: &[u16],
-    tolerance: f64,
-) -> Result<Vec<Row>> {
-    let drawn = drawn_for(first, last, k);
-    let sparse = sparse_of(gt, axis, &drawn);
-    let t = Instant::now();
-    let out = interpolate_labels(method, &sparse, axis, &drawn)?;
-    let seconds = t.elapsed().as_secs_f64();
-    drop(sparse);
-    labels
-        .iter()
-        .map(|&l| {
-            Ok(Row {
-                method: method.name().to_string(),
-                skip: k,
-                label: l,
-                drawn: drawn.len(),
-                seconds,
-                metrics: evaluate_label(gt, &out, l, tolerance)?,
-            })
-        })
-        .collect()
-}
-
-/// Everything the outputs are written from.
-struct Context_<'a> {
-    source: &'a Path,
-    /// How to regenerate the ground truth (when it is a phantom) and the study.
-    provenance: Provenance,
-    gt: &'a LabelVolume,
-    axis: Axis,
-    labels: &'a [u16],
-    methods: &'a [&'a str],
-    skips: &'a [usize],
-    rows: &'a [Row],
-    seconds: f64,
-}
-
-/// A metric of a row by its JSON key (`None` for null).
-fn metric(r: &Row, key: &str) -> Option<f64> {
-    let m = &r.metrics;
-    match key {
-        "dice" => m.dice,
-        "jaccard" => m.jaccard,
-        "sensitivity" => m.sensitivity,
-        "specificity" => m.specificity,
-        "precision" => m.precision,
-        "volume_similarity" => m.volume_similarity,
-        "hd" => m.hd,
-        "hd95" => m.hd95,
-        "assd" => m.assd,
-        "nsd" => m.nsd,
-        _ => None,
-    }
-}
-
-/// Per method, the metric at each skip averaged over the studied labels
-/// (`None` where any label's value is null).
-fn mean_series(ctx: &Context_<'_>, key: &str) -> Vec<(String, Vec<Option<f64>>)> {
-    ctx.methods
-        .iter()
-        .map(|&m| {
-            let vals = ctx
-                .skips
-                .iter()
-                .map(|&k| {
-                    let vs: Option<Vec<f64>> = ctx
-                        .rows
-                        .iter()
-                        .filter(|r| r.method == m && r.skip == k)
-                        .map(|r| metric(r, key))
-                        .collect();
-                    vs.filter(|v| !v.is_empty())
-                        .map(|v| v.iter().sum::<f64>() / v.len() as f64)
-                })
-                .collect();
-            (m.to_string(), vals)
-        })
-        .collect()
-}
-
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x:.6}")).unwrap_or_default()
-}
-
-fn write_csv(path: &Path, rows: &[Row]) -> Result<()> {
-    let keys = [
-        "dice",
-        "jaccard",
-        "sensitivity",
-        "specificity",
-        "precision",
-        "volume_similarity",
-        "hd",
-        "hd95",
-        "assd",
-        "nsd",
-    ];
-    let mut s = format!(
-        "method,skip,label,drawn_slices,seconds,{}\n",
-        keys.join(",")
-    );
-    for r in rows {
-        let _ = write!(
-            s,
-            "{},{},{},{},{:.4}",
-            r.method, r.skip, r.label, r.drawn, r.seconds
-        );
-        for k in keys {
-            let _ = write!(s, ",{}", fmt_opt(metric(r, k)));
-        }
-        s.push('\n');
-    }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
-}
-
-fn write_json(path: &Path, ctx: &Context_<'_>) -> Result<()> {
-    let g = ctx.gt.geometry();
-    let v = serde_json::json!({
-        "ground_truth": ctx.source.file_name().map(|f| f.to_string_lossy().to_string()),
-        "dims": g.dims,
-        "spacing": g.spacing,
-        "unit": g.unit.symbol(),
-        "axis": ctx.axis,
-        "labels": ctx.labels,
-        "methods": ctx.methods,
-        "default_method": DEFAULT_METHOD,
-        "skips": ctx.skips,
-        "seconds": ctx.seconds,
-        "rows": ctx.rows,
-    });
-    let text = serde_json::to_string_pretty(&v)?;
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Line colours of the plots (colour-blind safe, Okabe-Ito), then grey.
-const COLOURS: &[(u8, u8, u8)] = &[
-    (0, 114, 178),
-    (213, 94, 0),
-    (0, 158, 115),
-    (204, 121, 167),
-    (230, 159, 0),
-    (86, 180, 233),
-    (0, 0, 0),
-    (240, 228, 66),
-];
-
-/// One SVG: the metric against the number of skipped slices, a line per method.
-fn plot(
-    path: &Path,
-    title: &str,
-    series: &[(String, Vec<Option<f64>>)],
-    skips: &[usize],
-) -> Result<()> {
-    use plotters::prelude::*;
-    let vals: Vec<f64> = series
-        .iter()
-        .flat_map(|(_, v)| v.iter().flatten().copied())
-        .collect();
-    let (mut lo, mut hi) = vals
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    if !lo.is_finite() {
-        (lo, hi) = (0.0, 1.0);
-    }
-    let pad = ((hi - lo) * 0.05).max(1e-3);
-    let (lo, hi) = (lo - pad, hi + pad);
-    let x0 = *skips.first().unwrap_or(&0) as f64;
-    let x1 = (*skips.last().unwrap_or(&1) as f64).max(x0 + 1.0);
-    let root = SVGBackend::new(path, (720, 480)).into_drawing_area();
-    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("plot: {e}");
-    root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{title} vs slices skipped"), ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(x0 - 0.2..x1 + 0.2, lo..hi)
-        .map_err(|e| err(&e))?;
-    chart
-        .configure_mesh()
-        .x_desc("slices skipped between drawn slices")
-        .y_desc(title)
-        .x_labels(skips.len().min(12))
-        .x_label_formatter(&|x| format!("{x:.0}"))
-        .draw()
-        .map_err(|e| err(&e))?;
-    for (i, (name, v)) in series.iter().enumerate() {
-        let (r, g, b) = COLOURS.get(i).copied().unwrap_or((128, 128, 128));
-        let colour = RGBColor(r, g, b);
-        let pts: Vec<(f64, f64)> = skips
-            .iter()
-            .zip(v)
-            .filter_map(|(&k, y)| y.map(|y| (k as f64, y)))
-            .collect();
-        let width = if name == DEFAULT_METHOD { 3 } else { 2 };
-        chart
-            .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)))
-            .map_err(|e| err(&e))?
-            .label(name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(3))
-            });
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
-            .map_err(|e| err(&e))?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::LowerLeft)
-        .draw()
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
-}
-
-/// Where the ground truth came from and the commands that regenerate the study.
-struct Provenance {
-    /// The `interslice phantom` command that wrote the ground truth, when the
-    /// `phantom.json` next to it says so.
-    phantom: Option<String>,
-    /// The commands that regenerate the study (the phantom's first).
-    commands: Vec<String>,
-}
-
-/// The phantom command recorded in the `phantom.json` next to `gt` (written
-/// by `interslice phantom` with its parameters), if `gt` is one of its label
-/// volumes; `dir` stands for the phantom's output folder.
-fn phantom_command(gt: &Path, dir: &str) -> Option<String> {
-    let name = gt.file_name()?.to_string_lossy().to_string();
-    let text = std::fs::read_to_string(gt.parent()?.join("phantom.json")).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    if v.get("generator")?.as_str()? != "interslice phantom" {
-        return None;
-    }
-    let ours = v
-        .get("cells")?
-        .as_array()?
-        .iter()
-        .any(|c| c.get("labels").and_then(|l| l.as_str()) == Some(name.as_str()));
-    if !ours {
-        return None;
-    }
-    let p = v.get("params")?;
-    let mut cmd = format!(
-        "interslice phantom --out {dir} --count {} --size {} --seed {}",
-        p.get("count")?.as_u64()?,
-        p.get("size")?.as_u64()?,
-        p.get("seed")?.as_u64()?
-    );
-    // Only the label volume matters here; intensity options when not default.
-    if let Some(b) = p.get("bits").and_then(|b| b.as_u64()).filter(|&b| b != 8) {
-        let _ = write!(cmd, " --bits {b}");
-    }
-    if let Some(n) = p
-        .get("noise")
-        .and_then(|n| n.as_f64())
-        .filter(|&n| (n - 0.02).abs() > 1e-12)
-    {
-        let _ = write!(cmd, " --noise {n}");
-    }
-    Some(cmd)
 }
 
 /// The provenance of a study run with `a`.
@@ -556,136 +224,6 @@ fn provenance(a: &Args) -> Provenance {
     Provenance { phantom, commands }
 }
 
-/// The markdown summary: the setup, a table per plotted metric (mean over the
-/// studied labels, best per column in bold), per-label Dice and timings.
-fn summary(ctx: &Context_<'_>) -> String {
-    let g = ctx.gt.geometry();
-    let mut s = String::new();
-    let _ = writeln!(s, "# Interpolation study\n");
-    let _ = writeln!(
-        s,
-        "Ground truth `{}`{}: {}x{}x{} voxels, spacing {} x {} x {} {}; slices dropped along {}; \
-         labels {:?}. For k skipped slices the drawn slices are the first and last non-empty \
-         slices and every (k+1)-th slice from the first. Values are the mean over the labels. \
-         Best per column in **bold**; the default method is `{}`.\n",
-        ctx.source
-            .file_name()
-            .map(|f| f.to_string_lossy().to_string())
-            .unwrap_or_default(),
-        ctx.provenance
-            .phantom
-            .as_ref()
-            .map(|c| format!(" (the label volume written by `{c}`)"))
-            .unwrap_or_default(),
-        g.dims[0],
-        g.dims[1],
-        g.dims[2],
-        g.spacing[0],
-        g.spacing[1],
-        g.spacing[2],
-        g.unit.symbol(),
-        ctx.axis,
-        ctx.labels,
-        DEFAULT_METHOD
-    );
-    let _ = writeln!(
-        s,
-        "Regenerate with (release build):\n\n```\n{}\n```\n",
-        ctx.provenance.commands.join("\n")
-    );
-    for &(key, title, higher) in PLOTTED {
-        let series = mean_series(ctx, key);
-        let _ = writeln!(s, "## {title}\n\n![{title}]({key}.svg)\n");
-        table(&mut s, &series, ctx.skips, higher);
-    }
-    if ctx.labels.len() > 1 {
-        let _ = writeln!(s, "## Dice per label\n");
-        for &l in ctx.labels {
-            let _ = writeln!(s, "### Label {l}\n");
-            let series: Vec<(String, Vec<Option<f64>>)> = ctx
-                .methods
-                .iter()
-                .map(|&m| {
-                    let v = ctx
-                        .skips
-                        .iter()
-                        .map(|&k| {
-                            ctx.rows
-                                .iter()
-                                .find(|r| r.method == m && r.skip == k && r.label == l)
-                                .and_then(|r| r.metrics.dice)
-                        })
-                        .collect();
-                    (m.to_string(), v)
-                })
-                .collect();
-            table(&mut s, &series, ctx.skips, true);
-        }
-    }
-    let _ = writeln!(
-        s,
-        "## Time\n\nMean interpolation time per run (all labels), in seconds:\n"
-    );
-    let _ = writeln!(s, "| method | seconds |\n|---|---:|");
-    for &m in ctx.methods {
-        let t: Vec<f64> = ctx
-            .rows
-            .iter()
-            .filter(|r| r.method == m && r.label == ctx.labels[0])
-            .map(|r| r.seconds)
-            .collect();
-        let mean = t.iter().sum::<f64>() / t.len().max(1) as f64;
-        let _ = writeln!(s, "| {m} | {mean:.3} |");
-    }
-    let _ = writeln!(
-        s,
-        "\nWhole study (interpolation and metrics, runs in parallel): {:.1} s.",
-        ctx.seconds
-    );
-    s
-}
-
-/// A markdown table, methods as rows, skips as columns, best in bold.
-fn table(s: &mut String, series: &[(String, Vec<Option<f64>>)], skips: &[usize], higher: bool) {
-    let _ = write!(s, "| method |");
-    for k in skips {
-        let _ = write!(s, " k={k} |");
-    }
-    let _ = write!(s, "\n|---|");
-    for _ in skips {
-        let _ = write!(s, "---:|");
-    }
-    s.push('\n');
-    let best: Vec<Option<f64>> = (0..skips.len())
-        .map(|c| {
-            let it = series.iter().filter_map(|(_, v)| v[c]);
-            if higher {
-                it.reduce(f64::max)
-            } else {
-                it.reduce(f64::min)
-            }
-        })
-        .collect();
-    for (name, v) in series {
-        let _ = write!(s, "| {name} |");
-        for (c, x) in v.iter().enumerate() {
-            match x {
-                Some(x) if Some(*x) == best[c] => {
-                    let _ = write!(s, " **{x:.4}** |");
-                }
-                Some(x) => {
-                    let _ = write!(s, " {x:.4} |");
-                }
-                None => {
-                    let _ = write!(s, " – |");
-                }
-            }
-        }
-        s.push('\n');
-    }
-    s.push('\n');
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -697,12 +235,5 @@ mod tests {
         assert_eq!(parse_skips("5, 2,2").unwrap(), vec![2, 5]);
         assert!(parse_skips("3..1").is_err());
         assert!(parse_skips("a").is_err());
-    }
-
-    #[test]
-    fn drawn_keeps_first_and_last() {
-        assert_eq!(drawn_for(2, 9, 2), vec![2, 5, 8, 9]);
-        assert_eq!(drawn_for(0, 4, 0), vec![0, 1, 2, 3, 4]);
-        assert_eq!(drawn_for(0, 6, 2), vec![0, 3, 6]);
     }
 }

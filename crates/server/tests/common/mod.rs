@@ -1,8 +1,8 @@
 //! A project folder with small synthetic cells and a server on loopback.
 #![allow(dead_code)]
 
-use interslice_server::client::{Answer, Client};
 use interslice_server::{Config, RunningServer};
+use interslice_test_support::client::{Answer, Client};
 use std::net::SocketAddr;
 use std::path::Path;
 
@@ -12,7 +12,7 @@ pub const DIMS: [usize; 3] = [32, 28, 24];
 /// A temporary project with two cells.
 pub fn project() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("tempdir");
-    interslice_server::loadtest::write_cells(dir.path(), 2, DIMS, false).expect("cells");
+    interslice_test_support::loadtest::write_cells(dir.path(), 2, DIMS, false).expect("cells");
     dir
 }
 

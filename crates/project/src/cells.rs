@@ -1,12 +1,10 @@
-//! The cells of a project folder: discovery, safe ids, and a small LRU cache of
-//! loaded volumes (a 512³ 16-bit volume is 256 MiB, so only a few stay loaded).
-use crate::error::ApiError;
+//! The cells of a project folder: discovery, safe ids and loading a volume
+//! with what the API reports about it (range, histogram, content hash).
+use crate::error::ProjectError;
 use interslice_core::{AnyVolume, Volume, Voxel};
 use rayon::prelude::*;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
-use std::sync::{Arc, Mutex};
-use tokio::sync::OnceCell;
 
 /// Folder names inside a project that never hold cells.
 pub const RESERVED_DIRS: [&str; 3] = [".interslice", "ground_truth", "segmentations"];
@@ -65,25 +63,25 @@ pub fn id_of_name(name: &str) -> String {
 
 /// A relative path given by a client (e.g. a segmentation file to evaluate):
 /// refused when absolute or when it has `..` (or any non-normal component).
-pub fn safe_relative_path(p: &str) -> Result<PathBuf, ApiError> {
+pub fn safe_relative_path(p: &str) -> Result<PathBuf, ProjectError> {
     let path = Path::new(p);
     if p.is_empty() || p.contains('\0') {
-        return Err(ApiError::bad_request("empty path"));
+        return Err(ProjectError::invalid("empty path"));
     }
     if path.is_absolute() || p.starts_with('/') || p.starts_with('\\') {
-        return Err(ApiError::bad_request(format!(
+        return Err(ProjectError::invalid(format!(
             "absolute paths are not allowed: '{p}'"
         )));
     }
     for c in path.components() {
         if !matches!(c, Component::Normal(_)) {
-            return Err(ApiError::bad_request(format!(
+            return Err(ProjectError::invalid(format!(
                 "paths may not contain '..' or '.': '{p}'"
             )));
         }
     }
     if p.split(['/', '\\']).any(|s| s == "..") {
-        return Err(ApiError::bad_request(format!(
+        return Err(ProjectError::invalid(format!(
             "paths may not contain '..': '{p}'"
         )));
     }
@@ -212,7 +210,7 @@ impl LoadedCell {
     /// Every allocation the file's header asks for is checked by the reader
     /// (the default [`interslice_io::ReadLimits`]); a reader that panics
     /// all the same makes this cell's error, never the server's end.
-    pub fn load(path: &Path) -> Result<LoadedCell, ApiError> {
+    pub fn load(path: &Path) -> Result<LoadedCell, ProjectError> {
         let read = std::panic::catch_unwind(|| {
             interslice_io::read_volume_with(path, &interslice_io::ReadLimits::default())
         });
@@ -222,8 +220,8 @@ impl LoadedCell {
             .unwrap_or_default();
         match read {
             Ok(Ok(volume)) => Ok(Self::from_volume(volume)),
-            Ok(Err(e)) => Err(ApiError::from(e)),
-            Err(_) => Err(ApiError::internal(format!(
+            Ok(Err(e)) => Err(ProjectError::from(e)),
+            Err(_) => Err(ProjectError::internal(format!(
                 "cell file {name} cannot be read (the reader failed)"
             ))),
         }
@@ -272,55 +270,6 @@ impl LoadedCell {
     /// "u8", "u16", "i16" or "f32".
     pub fn dtype(&self) -> &'static str {
         self.volume.type_name()
-    }
-}
-
-type Slot = Arc<OnceCell<Arc<LoadedCell>>>;
-
-/// An LRU of loaded cells; concurrent requests for one cell share one load.
-pub struct CellCache {
-    capacity: usize,
-    slots: Mutex<VecDeque<(String, Slot)>>,
-}
-
-impl CellCache {
-    /// A cache holding at most `capacity` volumes (at least 1).
-    pub fn new(capacity: usize) -> CellCache {
-        CellCache {
-            capacity: capacity.max(1),
-            slots: Mutex::new(VecDeque::new()),
-        }
-    }
-
-    fn slot(&self, id: &str) -> Slot {
-        let mut slots = self.slots.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(pos) = slots.iter().position(|(k, _)| k == id) {
-            let entry = slots.remove(pos).expect("position is valid");
-            let slot = entry.1.clone();
-            slots.push_back(entry);
-            return slot;
-        }
-        let slot: Slot = Arc::new(OnceCell::new());
-        slots.push_back((id.to_string(), slot.clone()));
-        while slots.len() > self.capacity {
-            slots.pop_front();
-        }
-        slot
-    }
-
-    /// The loaded cell `id`, reading it with `load` on a blocking thread if needed.
-    pub async fn get<F>(&self, id: &str, load: F) -> Result<Arc<LoadedCell>, ApiError>
-    where
-        F: FnOnce() -> Result<LoadedCell, ApiError> + Send + 'static,
-    {
-        let slot = self.slot(id);
-        let cell = slot
-            .get_or_try_init(|| async move {
-                let loaded = tokio::task::spawn_blocking(load).await??;
-                Ok::<_, ApiError>(Arc::new(loaded))
-            })
-            .await?;
-        Ok(cell.clone())
     }
 }
 

@@ -4,7 +4,7 @@
 //! the database for lost, crossed or unexpected writes (exit 1 if any, or on
 //! any error) and prints the space it takes.
 use clap::Parser;
-use interslice_server::loadtest::{LoadConfig, run_preloaded};
+use interslice_test_support::loadtest::{LoadConfig, run_preloaded};
 use std::time::Duration;
 
 /// Concurrency test of the tracing server.

@@ -16,9 +16,9 @@
 //! write must not depend on how much the slice holds. The report ends with
 //! the space the database takes (all pages, the `contours` table, the WAL).
 use crate::client::{Client, quantile};
-use crate::{Config, RunningServer};
 use anyhow::{Context as _, bail};
 use interslice_core::{AnyVolume, Geometry, LengthUnit, Volume};
+use interslice_server::{Config, RunningServer};
 use interslice_store::{ContourQuery, SpaceUsage};
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -496,16 +496,9 @@ pub fn run_preloaded(cfg: &LoadConfig, preload: usize) -> anyhow::Result<LoadRep
     write_cells(dir.path(), cfg.cells, [cfg.size; 3], false)?;
     let mut config = Config::new(dir.path());
     config.bind = std::net::SocketAddr::from(([127, 0, 0, 1], 0));
-    let server: RunningServer = crate::spawn(config)?;
+    let server: RunningServer = interslice_server::spawn(config)?;
     let base = server.url();
-    let cell_ids: Vec<String> = server
-        .state
-        .cells
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .keys()
-        .cloned()
-        .collect();
+    let cell_ids = server.state.cell_ids();
     // Clients sharing a cell take interleaved slices, so no two share one.
     let per_cell = cfg.clients.div_ceil(cfg.cells);
     let barrier = Arc::new(Barrier::new(cfg.clients + 1));

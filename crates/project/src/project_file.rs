@@ -11,6 +11,7 @@
 //! ```
 //!
 //! `value` and `color` are optional (1, 2, … in order; palette colours).
+use crate::error::ProjectError;
 use interslice_core::components::{Component, Components, parse_hex_color};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -45,26 +46,26 @@ pub fn path_in(dir: &Path) -> PathBuf {
 
 /// The components a project folder declares, or None when it has no project
 /// file (or the file declares none).
-pub fn read_components(dir: &Path) -> anyhow::Result<Option<Components>> {
-    use anyhow::Context;
+pub fn read_components(dir: &Path) -> Result<Option<Components>, ProjectError> {
     use std::io::Read;
     let path = path_in(dir);
+    let at = |e: &dyn std::fmt::Display| ProjectError::invalid(format!("{}: {e}", path.display()));
+    let cannot_read =
+        |e: std::io::Error| ProjectError::invalid(format!("cannot read {}: {e}", path.display()));
     let f = match std::fs::File::open(&path) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(e).with_context(|| format!("cannot read {}", path.display())),
+        Err(e) => return Err(cannot_read(e)),
     };
     let mut text = String::new();
     f.take(MAX_BYTES + 1)
         .read_to_string(&mut text)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    anyhow::ensure!(
-        text.len() as u64 <= MAX_BYTES,
-        "{}: over 1 MiB",
-        path.display()
-    );
-    let file: ProjectFile = toml::from_str(&text)
-        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message().replace('\n', " ")))?;
+        .map_err(cannot_read)?;
+    if text.len() as u64 > MAX_BYTES {
+        return Err(at(&"over 1 MiB"));
+    }
+    let file: ProjectFile =
+        toml::from_str(&text).map_err(|e| at(&e.message().replace('\n', " ")))?;
     if file.components.is_empty() {
         return Ok(None);
     }
@@ -72,21 +73,20 @@ pub fn read_components(dir: &Path) -> anyhow::Result<Option<Components>> {
     for (n, c) in file.components.into_iter().enumerate() {
         let value = match c.value {
             Some(v) => v,
-            None => u16::try_from(n + 1).context("too many components")?,
+            None => u16::try_from(n + 1)
+                .map_err(|e| ProjectError::invalid(format!("too many components: {e}")))?,
         };
         let mut comp = Component::new(value, c.name);
         if let Some(col) = c.color {
-            comp.color = parse_hex_color(&col).with_context(|| path.display().to_string())?;
+            comp.color = parse_hex_color(&col).map_err(|e| at(&e))?;
         }
         list.push(comp);
     }
-    Ok(Some(
-        Components::new(list).with_context(|| path.display().to_string())?,
-    ))
+    Ok(Some(Components::new(list).map_err(|e| at(&e))?))
 }
 
 /// Write the components into the folder's project file (atomically).
-pub fn write_components(dir: &Path, components: &Components) -> anyhow::Result<()> {
+pub fn write_components(dir: &Path, components: &Components) -> Result<(), ProjectError> {
     let file = ProjectFile {
         components: components
             .as_slice()
@@ -98,9 +98,9 @@ pub fn write_components(dir: &Path, components: &Components) -> anyhow::Result<(
             })
             .collect(),
     };
+    let toml = toml::to_string(&file).map_err(|e| ProjectError::internal(e.to_string()))?;
     let text = format!(
-        "# interslice project: the components traced here (label value, name, colour).\n{}",
-        toml::to_string(&file)?
+        "# interslice project: the components traced here (label value, name, colour).\n{toml}"
     );
     let path = path_in(dir);
     interslice_io::raw::write_atomic(&path, |w| {

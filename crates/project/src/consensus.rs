@@ -12,8 +12,8 @@
 //!
 //! Used by `interslice variability` and by the export of `user=consensus`
 //! (`GET /api/cells/{cell}/export?user=consensus`), so both give the same volume.
-use crate::error::ApiError;
-use crate::groundtruth::label_volume;
+use crate::error::ProjectError;
+use crate::groundtruth::user_label_volume;
 use interslice_core::staple::{Staple, StapleParams, staple};
 use interslice_core::{Cancel, Geometry, LabelVolume, Mask, Volume};
 use interslice_interp::Interpolator;
@@ -60,7 +60,7 @@ pub fn rater_masks(
     method: &dyn Interpolator,
     only_label: Option<u16>,
     cancel: &Cancel,
-) -> Result<Vec<LabelRaters>, ApiError> {
+) -> Result<Vec<LabelRaters>, ProjectError> {
     let mut out: Vec<LabelRaters> = Vec::new();
     for user in store.tracers_of(cell)? {
         let mut labels: Vec<u16> = store
@@ -71,7 +71,7 @@ pub fn rater_masks(
             .collect();
         labels.dedup();
         for l in labels {
-            let v = label_volume(store, geometry, cell, user.id, method, Some(l), cancel)?;
+            let v = user_label_volume(store, geometry, cell, user.id, method, Some(l), cancel)?;
             let mask = v.mask_of(l);
             match out.iter_mut().find(|r| r.label == l) {
                 Some(r) => {
@@ -96,7 +96,7 @@ pub fn consensus_of(
     raters: &[LabelRaters],
     params: StapleParams,
     cancel: &Cancel,
-) -> Result<Consensus, ApiError> {
+) -> Result<Consensus, ProjectError> {
     let mut labels: LabelVolume = Volume::zeros(geometry.clone());
     let mut per_label = Vec::new();
     for r in raters.iter().filter(|r| r.masks.len() >= 2) {
@@ -116,7 +116,7 @@ pub fn consensus_of(
     Ok(Consensus { labels, per_label })
 }
 
-/// The consensus of a cell from the store (see [`rater_masks`]); 404 when no
+/// The consensus of a cell from the store (see [`rater_masks`]); not found when no
 /// label was traced by two users.
 pub fn consensus(
     store: &Store,
@@ -125,11 +125,11 @@ pub fn consensus(
     method: &dyn Interpolator,
     only_label: Option<u16>,
     cancel: &Cancel,
-) -> Result<Consensus, ApiError> {
+) -> Result<Consensus, ProjectError> {
     let raters = rater_masks(store, geometry, cell, method, only_label, cancel)?;
     let c = consensus_of(geometry, &raters, StapleParams::default(), cancel)?;
     if c.per_label.is_empty() {
-        return Err(ApiError::not_found(format!(
+        return Err(ProjectError::not_found(format!(
             "no label of cell '{cell}' was traced by two users{}",
             only_label
                 .map(|l| format!(" (label {l})"))
@@ -149,9 +149,9 @@ pub fn consensus_for(
     method: &dyn Interpolator,
     only_label: Option<u16>,
     cancel: &Cancel,
-) -> Result<LabelVolume, ApiError> {
+) -> Result<LabelVolume, ProjectError> {
     if me.role != Role::Reviewer {
-        return Err(ApiError::forbidden(
+        return Err(ProjectError::forbidden(
             "only reviewers may read the consensus of everyone's tracings",
         ));
     }
@@ -161,7 +161,7 @@ pub fn consensus_for(
 /// The file of a `user=consensus` export: the consensus label volume in
 /// `format` (nii.gz, nii, nrrd, mha, tiff) and its file name
 /// `<cell>-consensus.<ext>`. Contours have no consensus (STAPLE works on
-/// volumes), so `format=contours` is a 400.
+/// volumes), so `format=contours` is invalid.
 #[allow(clippy::too_many_arguments)]
 pub fn export_bytes(
     store: &Store,
@@ -172,25 +172,22 @@ pub fn export_bytes(
     method: &dyn Interpolator,
     only_label: Option<u16>,
     cancel: &Cancel,
-) -> Result<(Vec<u8>, String), ApiError> {
+) -> Result<(Vec<u8>, String), ProjectError> {
     let ext = match format {
         "nii.gz" | "nii" | "nrrd" | "tiff" | "tif" | "mha" => format,
         "contours" => {
-            return Err(ApiError::bad_request(
+            return Err(ProjectError::invalid(
                 "the consensus is a label volume; export it as nii.gz, nii, nrrd, mha or tiff",
             ));
         }
         other => {
-            return Err(ApiError::bad_request(format!(
+            return Err(ProjectError::invalid(format!(
                 "unknown export format '{other}' (nii.gz, nii, nrrd, mha or tiff)"
             )));
         }
     };
     let labels = consensus_for(store, me, geometry, cell, method, only_label, cancel)?;
-    let dir = tempfile::tempdir().map_err(|e| ApiError::internal(e.to_string()))?;
     let name = format!("{cell}-consensus.{ext}");
-    let path = dir.path().join(&name);
-    interslice_io::write_labels(&path, &labels)?;
-    let bytes = std::fs::read(&path).map_err(|e| ApiError::internal(e.to_string()))?;
+    let bytes = crate::export::label_file_bytes(store, &labels, &name)?;
     Ok((bytes, name))
 }

@@ -1,0 +1,297 @@
+//! A user's ground truth of a cell: their contours rasterised into sparse masks
+//! and interpolated, one label at a time, then painted in ascending label
+//! order (an inner structure overwrites the one containing it).
+//!
+//! The tracing comes from the annotation database ([`StoredTracing`], what
+//! the server and `interslice export` use) or from a contours file
+//! ([`FileTracing`], what `interslice interpolate CONTOURS.json` uses); both
+//! go through [`label_volume`], so one tracing gives one label volume
+//! whichever way it is interpolated. Each label keeps its own drawn slices: a
+//! slice drawn for the nucleus says nothing about the cell outline there.
+use crate::error::ProjectError;
+use interslice_core::contour_file::ContourFile;
+use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, SliceRef, Volume};
+use interslice_interp::{Interpolator, SparseMask};
+use interslice_store::{ContourQuery, Store, StoredContour};
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::sync::{Arc, Mutex};
+
+/// Stored contours as core contours.
+pub fn to_core(stored: &[StoredContour]) -> Vec<Contour> {
+    stored
+        .iter()
+        .map(|c| Contour {
+            slice: SliceRef {
+                axis: c.axis,
+                index: c.index,
+            },
+            label: c.label,
+            points: c.points.clone(),
+            author: c.author.clone(),
+            created: c.created.clone(),
+            pressure: c.pressure.clone(),
+            times_ms: c.times_ms.clone(),
+            tool: Some(c.tool.clone()),
+        })
+        .collect()
+}
+
+/// What one user traced on one cell, wherever it is kept.
+pub trait Tracing {
+    /// Every (label, axis) with anything drawn, with its number of drawn
+    /// slices (traced or drawn empty).
+    fn drawn_labels(&self) -> Result<Vec<(u16, Axis, usize)>, ProjectError>;
+    /// The contours of `label` on the slices across `axis`.
+    fn contours(&self, label: u16, axis: Axis) -> Result<Vec<Contour>, ProjectError>;
+    /// The drawn slices of `label` along `axis` (traced or drawn empty), ascending.
+    fn drawn(&self, label: u16, axis: Axis) -> Result<Vec<usize>, ProjectError>;
+    /// Whose tracing of what, for messages ("cell 'c1' by this user").
+    fn describe(&self) -> String;
+}
+
+/// A user's tracing of a cell in the annotation database.
+pub struct StoredTracing<'a> {
+    /// The database.
+    pub store: &'a Store,
+    /// The cell id.
+    pub cell: &'a str,
+    /// The user.
+    pub user_id: i64,
+}
+
+impl Tracing for StoredTracing<'_> {
+    fn drawn_labels(&self) -> Result<Vec<(u16, Axis, usize)>, ProjectError> {
+        Ok(self.store.drawn_labels(self.cell, self.user_id)?)
+    }
+
+    fn contours(&self, label: u16, axis: Axis) -> Result<Vec<Contour>, ProjectError> {
+        let stored = self.store.contours(&ContourQuery {
+            cell: self.cell.to_string(),
+            user_id: self.user_id,
+            axis: Some(axis),
+            index: None,
+            label: Some(label),
+        })?;
+        Ok(to_core(&stored))
+    }
+
+    fn drawn(&self, label: u16, axis: Axis) -> Result<Vec<usize>, ProjectError> {
+        Ok(self
+            .store
+            .drawn(self.cell, self.user_id, label, axis)?
+            .into_iter()
+            .map(|d| d.index)
+            .collect())
+    }
+
+    fn describe(&self) -> String {
+        format!("cell '{}' by this user", self.cell)
+    }
+}
+
+/// The tracing in a contours file (every contour and drawn-empty slice of
+/// the file, whoever drew it).
+pub struct FileTracing<'a> {
+    /// The file's contents.
+    pub file: &'a ContourFile,
+    /// Its name, for messages.
+    pub name: &'a str,
+}
+
+impl FileTracing<'_> {
+    fn drawn_sets(&self) -> BTreeMap<(u16, Axis), BTreeSet<usize>> {
+        let mut out: BTreeMap<(u16, Axis), BTreeSet<usize>> = BTreeMap::new();
+        let contours = self.file.contours.iter().map(|c| (c.label, c.slice));
+        let empty = self.file.drawn_empty.iter().map(|d| (d.label, d.slice));
+        for (label, slice) in contours.chain(empty) {
+            out.entry((label, slice.axis))
+                .or_default()
+                .insert(slice.index);
+        }
+        out
+    }
+}
+
+impl Tracing for FileTracing<'_> {
+    fn drawn_labels(&self) -> Result<Vec<(u16, Axis, usize)>, ProjectError> {
+        Ok(self
+            .drawn_sets()
+            .into_iter()
+            .map(|((label, axis), s)| (label, axis, s.len()))
+            .collect())
+    }
+
+    fn contours(&self, label: u16, axis: Axis) -> Result<Vec<Contour>, ProjectError> {
+        Ok(self
+            .file
+            .contours
+            .iter()
+            .filter(|c| c.label == label && c.slice.axis == axis)
+            .cloned()
+            .collect())
+    }
+
+    fn drawn(&self, label: u16, axis: Axis) -> Result<Vec<usize>, ProjectError> {
+        Ok(self
+            .drawn_sets()
+            .remove(&(label, axis))
+            .map(|s| s.into_iter().collect())
+            .unwrap_or_default())
+    }
+
+    fn describe(&self) -> String {
+        self.name.to_string()
+    }
+}
+
+/// The sparse mask of one label along one axis and its drawn slices (with
+/// contours or marked empty).
+pub fn sparse_mask(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+) -> Result<(Mask, Vec<usize>), ProjectError> {
+    let contours = tracing.contours(label, axis)?;
+    let drawn = tracing.drawn(label, axis)?;
+    let mask = interslice_core::raster::contours_to_mask(geometry, &contours, label)?;
+    Ok((mask, drawn))
+}
+
+/// Interpolate one label of one tracing along one axis; `cancel` is checked
+/// before and after the method runs (one label is the unit of work).
+pub fn interpolate_label(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+    method: &dyn Interpolator,
+    cancel: &Cancel,
+) -> Result<(Mask, Vec<usize>), ProjectError> {
+    cancel.check()?;
+    let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
+    if drawn.len() < 2 {
+        return Err(ProjectError::invalid(format!(
+            "label {label} has {} drawn slice(s) along {axis}; interpolation needs at least two",
+            drawn.len()
+        )));
+    }
+    let out = method.interpolate(SparseMask::new(&mask, axis, &drawn).with_cancel(cancel))?;
+    cancel.check()?;
+    Ok((out, drawn))
+}
+
+/// The full label volume of a tracing: each label drawn is interpolated
+/// along the axis with most drawn slices for it (ties: z, then y, then x),
+/// then painted in ascending label order.
+pub fn label_volume(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    method: &dyn Interpolator,
+    only_label: Option<u16>,
+    cancel: &Cancel,
+) -> Result<LabelVolume, ProjectError> {
+    let drawn = tracing.drawn_labels()?;
+    let mut best: Vec<(u16, Axis, usize)> = Vec::new();
+    for (label, axis, n) in drawn {
+        if only_label.is_some_and(|l| l != label) {
+            continue;
+        }
+        match best.iter_mut().find(|b| b.0 == label) {
+            Some(b) if n > b.2 || (n == b.2 && axis > b.1) => *b = (label, axis, n),
+            Some(_) => {}
+            None => best.push((label, axis, n)),
+        }
+    }
+    if best.is_empty() {
+        return Err(ProjectError::not_found(format!(
+            "nothing traced on {}{}",
+            tracing.describe(),
+            only_label
+                .map(|l| format!(" for label {l}"))
+                .unwrap_or_default()
+        )));
+    }
+    best.sort_by_key(|b| b.0);
+    let mut out: LabelVolume = Volume::zeros(geometry.clone());
+    for (label, axis, _) in best {
+        let (mask, _) = interpolate_label(tracing, geometry, label, axis, method, cancel)?;
+        for (o, &m) in out.data_mut().iter_mut().zip(mask.data()) {
+            if m {
+                *o = label;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A user's label volume from the database (see [`label_volume`]).
+pub fn user_label_volume(
+    store: &Store,
+    geometry: &Geometry,
+    cell: &str,
+    user_id: i64,
+    method: &dyn Interpolator,
+    only_label: Option<u16>,
+    cancel: &Cancel,
+) -> Result<LabelVolume, ProjectError> {
+    let tracing = StoredTracing {
+        store,
+        cell,
+        user_id,
+    };
+    label_volume(&tracing, geometry, method, only_label, cancel)
+}
+
+type GtKey = (String, i64, String, Option<u16>);
+
+/// Recently computed label volumes, valid while the user's revision of the
+/// cell is unchanged (overlays ask for one slice at a time).
+pub struct GtCache {
+    capacity: usize,
+    entries: Mutex<VecDeque<(GtKey, i64, Arc<LabelVolume>)>>,
+}
+
+impl GtCache {
+    /// A cache of at most `capacity` volumes.
+    pub fn new(capacity: usize) -> GtCache {
+        GtCache {
+            capacity: capacity.max(1),
+            entries: Mutex::new(VecDeque::new()),
+        }
+    }
+
+    /// The cached or newly computed label volume of a user's tracing.
+    pub fn get(
+        &self,
+        tracing: &StoredTracing<'_>,
+        geometry: &Geometry,
+        method: &dyn Interpolator,
+        only_label: Option<u16>,
+        cancel: &Cancel,
+    ) -> Result<Arc<LabelVolume>, ProjectError> {
+        let rev = tracing.store.revision(tracing.cell, tracing.user_id)?;
+        let key: GtKey = (
+            tracing.cell.to_string(),
+            tracing.user_id,
+            method.name().to_string(),
+            only_label,
+        );
+        {
+            let entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some((_, r, v)) = entries.iter().find(|(k, _, _)| *k == key)
+                && *r == rev
+            {
+                return Ok(v.clone());
+            }
+        }
+        let v = Arc::new(label_volume(tracing, geometry, method, only_label, cancel)?);
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        entries.retain(|(k, _, _)| *k != key);
+        entries.push_back((key, rev, v.clone()));
+        while entries.len() > self.capacity {
+            entries.pop_front();
+        }
+        Ok(v)
+    }
+}
