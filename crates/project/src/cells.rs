@@ -102,9 +102,69 @@ fn has_slice_images(dir: &Path) -> bool {
         >= 2
 }
 
+/// The leaf that addresses one series of a multi-series DICOM folder:
+/// `FOLDER/@series=UID` (no DICOM file is named so; see [`series_of`]).
+const SERIES_LEAF: &str = "@series=";
+
+/// The path of the cell that is series `uid` of the DICOM folder `folder`.
+pub fn series_path(folder: &Path, uid: &str) -> PathBuf {
+    folder.join(format!("{SERIES_LEAF}{uid}"))
+}
+
+/// The DICOM folder and series UID of a path made by [`series_path`].
+pub fn series_of(path: &Path) -> Option<(&Path, &str)> {
+    let leaf = path.file_name()?.to_str()?.strip_prefix(SERIES_LEAF)?;
+    Some((path.parent()?, leaf))
+}
+
+/// What a cell's file is called in lists: its file name, or for one series
+/// of a DICOM folder `FOLDER (series UID)`.
+pub fn display_name(path: &Path) -> String {
+    let name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    match series_of(path) {
+        Some((folder, uid)) => format!("{} (series {uid})", name(folder)),
+        None => name(path),
+    }
+}
+
+/// The cells of a DICOM folder named `name`: the folder itself when it holds
+/// one series (or cannot be listed: reading it then reports why), else one
+/// cell per series, `NAME-s<SeriesNumber>` (`NAME-<n>` when the numbers
+/// are missing or repeat), in SeriesNumber order.
+fn dicom_cells(name: &str, path: &Path) -> Vec<(String, PathBuf)> {
+    let base = id_of_name(name);
+    let series = match interslice_io::dicom::list_series(path) {
+        Ok(s) if s.len() > 1 => s,
+        _ => return vec![(base, path.to_path_buf())],
+    };
+    let numbers: Vec<Option<i64>> = series.iter().map(|s| s.number).collect();
+    let unique = numbers.iter().all(Option::is_some)
+        && numbers
+            .iter()
+            .collect::<std::collections::BTreeSet<_>>()
+            .len()
+            == numbers.len();
+    series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let id = match (unique, s.number) {
+                (true, Some(n)) => format!("{base}-s{n}"),
+                _ => format!("{base}-{}", i + 1),
+            };
+            (id, series_path(path, &s.uid))
+        })
+        .collect()
+}
+
 /// The cells of `dir`, by id: supported volume files, folders of slice
-/// images and folders of DICOM files at the top level; hidden entries and the reserved folders skipped.
-/// Two names mapping to one id get `-2`, `-3`, ... in name order.
+/// images and folders of DICOM files (one cell per series) at the top level;
+/// hidden entries and the reserved folders skipped. Two names mapping to one
+/// id get `-2`, `-3`, ... in name order.
 pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
     let mut entries: Vec<(String, PathBuf)> = std::fs::read_dir(dir)?
         .flatten()
@@ -116,23 +176,28 @@ pub fn scan(dir: &Path) -> std::io::Result<BTreeMap<String, PathBuf>> {
         if name.starts_with('.') || RESERVED_DIRS.contains(&name.as_str()) {
             continue;
         }
-        let ok = if path.is_dir() {
-            interslice_io::dicom::is_dicom_folder(&path)
-                || (has_slice_images(&path) && interslice_io::Format::of_path(&path).is_ok())
+        let found = if path.is_dir() && interslice_io::dicom::is_dicom_folder(&path) {
+            dicom_cells(&name, &path)
+        } else if path.is_dir() {
+            if has_slice_images(&path) && interslice_io::Format::of_path(&path).is_ok() {
+                vec![(id_of_name(&name), path)]
+            } else {
+                Vec::new()
+            }
+        } else if interslice_io::Format::of_path(&path).is_ok() {
+            vec![(id_of_name(&name), path)]
         } else {
-            interslice_io::Format::of_path(&path).is_ok()
+            Vec::new()
         };
-        if !ok {
-            continue;
+        for (base, path) in found {
+            let mut id = base.clone();
+            let mut n = 2;
+            while out.contains_key(&id) {
+                id = format!("{base}-{n}");
+                n += 1;
+            }
+            out.insert(id, path);
         }
-        let base = id_of_name(&name);
-        let mut id = base.clone();
-        let mut n = 2;
-        while out.contains_key(&id) {
-            id = format!("{base}-{n}");
-            n += 1;
-        }
-        out.insert(id, path);
     }
     Ok(out)
 }
@@ -211,13 +276,11 @@ impl LoadedCell {
     /// (the default [`interslice_io::ReadLimits`]); a reader that panics
     /// all the same makes this cell's error, never the server's end.
     pub fn load(path: &Path) -> Result<LoadedCell, ProjectError> {
-        let read = std::panic::catch_unwind(|| {
-            interslice_io::read_volume_with(path, &interslice_io::ReadLimits::default())
+        let read = std::panic::catch_unwind(|| match series_of(path) {
+            Some((folder, uid)) => interslice_io::read_volume_series(folder, Some(uid)),
+            None => interslice_io::read_volume_with(path, &interslice_io::ReadLimits::default()),
         });
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = display_name(path);
         match read {
             Ok(Ok(volume)) => Ok(Self::from_volume(volume)),
             Ok(Err(e)) => Err(ProjectError::from(e)),

@@ -43,10 +43,7 @@ pub(super) async fn summary(
     statuses: &std::collections::HashMap<String, CellStatus>,
 ) -> Result<CellSummary, ApiError> {
     let path = state.cell_path(id)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_else(|| id.to_string());
+    let name = interslice_project::cells::display_name(&path);
     let rec = state.store.cell(id)?;
     let (geometry, dtype) = match rec.and_then(|r| Some((r.geometry?, r.dtype?))) {
         Some((g, d)) => (
@@ -106,8 +103,7 @@ pub(super) async fn list_cells(
                     .read()
                     .unwrap_or_else(|p| p.into_inner())
                     .get(&id)
-                    .and_then(|p| p.file_name())
-                    .map(|n| n.to_string_lossy().into_owned())
+                    .map(|p| interslice_project::cells::display_name(p))
                     .unwrap_or_default();
                 out.push(CellSummary {
                     id,
