@@ -428,37 +428,25 @@ pub fn write(file: &ContourFile) -> Result<String, CoreError> {
     out.push_str(&format!("  \"geometry\": {},\n", js(&geometry)?));
     let labels: Result<Vec<String>, CoreError> = file.labels.iter().map(js).collect();
     push_list(&mut out, "labels", &labels?, true);
-    let contours: Result<Vec<String>, CoreError> = file
-        .contours
-        .iter()
-        .map(|c| {
-            js(&WireContour {
-                axis: c.slice.axis,
-                index: c.slice.index,
-                label: c.label,
-                author: c.author.clone(),
-                created: c.created.clone(),
-                tool: c.tool.clone(),
-                points: c.points.clone(),
-                pressure: c.pressure.clone(),
-                times_ms: c.times_ms.clone(),
-            })
-        })
-        .collect();
-    push_list(&mut out, "contours", &contours?, true);
-    let empties: Result<Vec<String>, CoreError> = file
-        .drawn_empty
-        .iter()
-        .map(|e| {
-            js(&WireEmpty {
-                axis: e.slice.axis,
-                index: e.slice.index,
-                label: e.label,
-                author: e.author.clone(),
-            })
-        })
-        .collect();
-    push_list(&mut out, "drawn_empty", &empties?, false);
+    let contours = js_all(file.contours.iter().map(|c| WireContour {
+        axis: c.slice.axis,
+        index: c.slice.index,
+        label: c.label,
+        author: c.author.clone(),
+        created: c.created.clone(),
+        tool: c.tool.clone(),
+        points: c.points.clone(),
+        pressure: c.pressure.clone(),
+        times_ms: c.times_ms.clone(),
+    }))?;
+    push_list(&mut out, "contours", &contours, true);
+    let empties = js_all(file.drawn_empty.iter().map(|e| WireEmpty {
+        axis: e.slice.axis,
+        index: e.slice.index,
+        label: e.label,
+        author: e.author.clone(),
+    }))?;
+    push_list(&mut out, "drawn_empty", &empties, false);
     out.push_str("}\n");
     Ok(out)
 }
@@ -480,6 +468,11 @@ fn push_list(out: &mut String, key: &str, items: &[String], comma: bool) {
 /// Compact JSON of one item (one line of the file).
 fn js<T: Serialize>(v: &T) -> Result<String, CoreError> {
     serde_json::to_string(v).map_err(|e| invalid(e.to_string()))
+}
+
+/// [`js`] of every item, in order.
+fn js_all<T: Serialize>(items: impl Iterator<Item = T>) -> Result<Vec<String>, CoreError> {
+    items.map(|x| js(&x)).collect()
 }
 
 #[cfg(test)]
