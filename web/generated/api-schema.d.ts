@@ -623,6 +623,12 @@ export interface components {
             label: number;
             /** @description Method name (default first in `/api/methods`). */
             method?: string | null;
+            /**
+             * @description A live preview: kept in memory for this user (a negative `result_id`,
+             *     its mesh served while it is among their latest previews), not stored
+             *     as a result.
+             */
+            preview?: boolean;
         };
         /** @description Body of `POST /api/login`. */
         LoginBody: {

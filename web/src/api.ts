@@ -284,9 +284,13 @@ export class Api {
   methods(): Promise<Method[]> {
     return this.json("GET", "/api/methods");
   }
-  /** POST interpolate. */
-  interpolate(id: string, label: number, axis: Axis, method?: string): Promise<InterpResult> {
-    const body: Schemas["InterpolateBody"] = method ? { label, axis, method } : { label, axis };
+  /**
+   * POST interpolate. A `preview` is kept in memory on the server (a
+   * negative result id) instead of being stored as a result: the live
+   * previews after each pen lift; the Interpolate button stores its result.
+   */
+  interpolate(id: string, label: number, axis: Axis, method?: string, preview = false): Promise<InterpResult> {
+    const body: Schemas["InterpolateBody"] = { label, axis, preview, ...(method ? { method } : {}) };
     return this.json("POST", `/api/cells/${enc(id)}/interpolate`, body);
   }
   /** GET the mesh of an interpolation result. */

@@ -62,7 +62,7 @@ export class Previews {
   async ensure(label: number, axis: Axis, method: string): Promise<InterpResult> {
     let res = this.get(label, axis);
     if (!res) {
-      res = await this.api.interpolate(this.cellId, label, axis, method || undefined);
+      res = await this.api.interpolate(this.cellId, label, axis, method || undefined, true);
       this.results.set(`${label}/${axis}`, res);
     }
     return res;
@@ -99,7 +99,8 @@ export class Previews {
         this.results.delete(`${label}/${axis}`);
         this.hooks.show(label, null, explicit);
       } else {
-        const r = await this.api.interpolate(this.cellId, label, axis, method || undefined);
+        // Only the Interpolate button stores a result; live previews stay in the server's memory.
+        const r = await this.api.interpolate(this.cellId, label, axis, method || undefined, !explicit);
         this.results.set(`${label}/${axis}`, r);
         this.hooks.show(label, r, explicit);
         if (t0 !== null) {
