@@ -35,7 +35,7 @@
 //! labels' rates, `V` the sum of their volumes. The N best slices are chosen
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
-use crate::labels::{drawn_labels, traced_mask};
+use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
 use crate::loo::Compact;
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, LabelVolume, Mask};
@@ -169,15 +169,7 @@ pub fn advise(
     count: usize,
     method: &dyn Interpolator,
 ) -> Result<Advice, InterpError> {
-    let mut drawn = drawn.to_vec();
-    drawn.sort_unstable();
-    drawn.dedup();
-    let n = sparse.slice_count(axis);
-    if let Some(&bad) = drawn.iter().find(|&&d| d >= n) {
-        return Err(InterpError::Input(format!(
-            "drawn slice {axis}={bad} is out of range (0..{n})"
-        )));
-    }
+    let drawn = sorted_drawn(sparse, axis, drawn)?;
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
             "advice needs at least two drawn slices along {axis}, got {}: trace the first \

@@ -51,15 +51,7 @@ fn run(
     drawn: &[usize],
     confidence: bool,
 ) -> Result<(LabelVolume, Option<Volume<f32>>), InterpError> {
-    let mut drawn = drawn.to_vec();
-    drawn.sort_unstable();
-    drawn.dedup();
-    let n = sparse.slice_count(axis);
-    if let Some(&bad) = drawn.iter().find(|&&d| d >= n) {
-        return Err(InterpError::Input(format!(
-            "drawn slice {axis}={bad} is out of range (0..{n})"
-        )));
-    }
+    let drawn = sorted_drawn(sparse, axis, drawn)?;
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
             "interpolation needs at least two drawn slices along {axis}, got {}",
@@ -101,6 +93,25 @@ fn run(
         }
     }
     Ok((out, conf))
+}
+
+/// The drawn slices sorted and de-duplicated; an error names the first one
+/// outside the volume along `axis`.
+pub fn sorted_drawn(
+    sparse: &LabelVolume,
+    axis: Axis,
+    drawn: &[usize],
+) -> Result<Vec<usize>, InterpError> {
+    let mut drawn = drawn.to_vec();
+    drawn.sort_unstable();
+    drawn.dedup();
+    let n = sparse.slice_count(axis);
+    if let Some(&bad) = drawn.iter().find(|&&d| d >= n) {
+        return Err(InterpError::Input(format!(
+            "drawn slice {axis}={bad} is out of range (0..{n})"
+        )));
+    }
+    Ok(drawn)
 }
 
 /// Labels present on the drawn slices, ascending (each is interpolated on
