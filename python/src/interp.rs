@@ -76,7 +76,14 @@ pub fn advise<'py>(
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
     let advice = py
         .detach(|| {
-            interslice_interp::advise::advise(&t.sparse, t.axis, &t.drawn, count, t.method.as_ref())
+            interslice_interp::advise::advise(
+                &t.sparse,
+                t.axis,
+                &t.drawn,
+                count,
+                method,
+                t.image.clone(),
+            )
         })
         .map_err(error)?;
     crate::to_py(py, &advice)
@@ -89,6 +96,7 @@ struct Tracing {
     axis: Axis,
     drawn: Vec<usize>,
     method: Box<dyn Interpolator>,
+    image: Option<Arc<Volume<f32>>>,
 }
 
 impl Tracing {
@@ -122,7 +130,7 @@ impl Tracing {
             }
             None => None,
         };
-        let method = by_name_with_image(method, image).map_err(error)?;
+        let method = by_name_with_image(method, image.clone()).map_err(error)?;
         let data = labels_u16(py, a, "labels")?;
         let sparse: LabelVolume = Volume::from_vec(g, data).map_err(error)?;
         let count = sparse.slice_count(axis) as i64;
@@ -147,6 +155,7 @@ impl Tracing {
             axis,
             drawn,
             method,
+            image,
         })
     }
 }

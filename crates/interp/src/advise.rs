@@ -36,11 +36,12 @@
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
 use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
-use crate::loo::Compact;
-use crate::{InterpError, Interpolator, SparseMask};
-use interslice_core::{Axis, LabelVolume, Mask};
+use crate::loo::{Compact, stack};
+use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
+use interslice_core::{Axis, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Arc;
 
 /// One suggested slice.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -160,16 +161,30 @@ fn label_rates(
 
 /// Rank the undrawn slices of `sparse` between its outermost drawn slices:
 /// the `count` best to trace next, best first (see the module docs for the
-/// model). `method` is the one that will fill the gaps; its leave-one-out
-/// errors calibrate the model. Errors with fewer than two drawn slices.
+/// model). `method` (a registry name, default as for interpolation; the
+/// image-aware one with `image`) is the one that will fill the gaps: its
+/// leave-one-out errors calibrate the model. Errors with fewer than two
+/// drawn slices or an image on another grid.
 pub fn advise(
     sparse: &LabelVolume,
     axis: Axis,
     drawn: &[usize],
     count: usize,
-    method: &dyn Interpolator,
+    method: Option<&str>,
+    image: Option<Arc<Volume<f32>>>,
 ) -> Result<Advice, InterpError> {
     let drawn = sorted_drawn(sparse, axis, drawn)?;
+    // The leave-one-out runs on the stack of the drawn slices, so an image
+    // goes with them stacked the same way.
+    let image = match image {
+        Some(img) => {
+            img.geometry().ensure_same_grid(sparse.geometry())?;
+            Some(Arc::new(stack(&img, axis, &drawn)?))
+        }
+        None => None,
+    };
+    let method = by_name_with_image(method, image)?;
+    let method = method.as_ref();
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
             "advice needs at least two drawn slices along {axis}, got {}: trace the first \
@@ -297,8 +312,7 @@ mod tests {
     fn suggestions_are_undrawn_distinct_inside_and_best_first() {
         let drawn = [0, 10, 20, 30, 39];
         let (_, sparse) = traced(&drawn);
-        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
-        let a = advise(&sparse, Axis::Z, &drawn, 8, method.as_ref()).unwrap();
+        let a = advise(&sparse, Axis::Z, &drawn, 8, None, None).unwrap();
         assert_eq!(a.suggestions.len(), 8);
         let mut seen = std::collections::BTreeSet::new();
         for s in &a.suggestions {
@@ -324,8 +338,7 @@ mod tests {
         // The cap (30..39) shrinks from radius 20 to 0; the cone changes slowly.
         let drawn = [0, 10, 20, 30, 39];
         let (_, sparse) = traced(&drawn);
-        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
-        let a = advise(&sparse, Axis::Z, &drawn, 1, method.as_ref()).unwrap();
+        let a = advise(&sparse, Axis::Z, &drawn, 1, None, None).unwrap();
         assert_eq!(a.suggestions[0].between, [30, 39], "{:?}", a.suggestions);
     }
 
@@ -345,7 +358,7 @@ mod tests {
         let mut advised = ends.to_vec();
         for _ in 0..4 {
             let sparse_now = crate::protocol::sparse_of(&full, Axis::Z, &advised);
-            let a = advise(&sparse_now, Axis::Z, &advised, 1, method.as_ref()).unwrap();
+            let a = advise(&sparse_now, Axis::Z, &advised, 1, None, None).unwrap();
             advised.push(a.suggestions[0].slice);
             advised.sort_unstable();
         }
@@ -357,10 +370,24 @@ mod tests {
     }
 
     #[test]
+    fn with_an_image_the_advice_comes_from_the_image_aware_method() {
+        let drawn = [0, 10, 20, 30, 39];
+        let (full, sparse) = traced(&drawn);
+        let image = Arc::new(full.map(|v| if v == 1 { 180.0f32 } else { 30.0 }));
+        let a = advise(&sparse, Axis::Z, &drawn, 3, None, Some(image)).unwrap();
+        assert_eq!(a.suggestions.len(), 3);
+        assert!(a.predicted_dice > 0.5 && a.predicted_dice <= 1.0);
+        // An image on another grid is refused.
+        let g =
+            interslice_core::Geometry::new([8, 8, 8], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let small = Arc::new(Volume::filled(g, 1.0f32));
+        assert!(advise(&sparse, Axis::Z, &drawn, 3, None, Some(small)).is_err());
+    }
+
+    #[test]
     fn fewer_than_two_drawn_slices_is_an_error_that_says_what_to_do() {
         let (_, sparse) = traced(&[5]);
-        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
-        let e = advise(&sparse, Axis::Z, &[5], 3, method.as_ref())
+        let e = advise(&sparse, Axis::Z, &[5], 3, None, None)
             .unwrap_err()
             .to_string();
         assert!(

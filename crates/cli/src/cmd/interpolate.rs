@@ -21,7 +21,7 @@ use interslice_core::{AnyVolume, Axis, LabelVolume, Volume};
 use interslice_interp::drawn::{nonempty_slices, parse_drawn};
 use interslice_interp::image::intensity_f32;
 use interslice_interp::{
-    DEFAULT_METHOD, IMAGE_METHOD, by_name_with_image, interpolate_labels,
+    DEFAULT_METHOD, IMAGE_METHOD, Interpolator, by_name_with_image, interpolate_labels,
     interpolate_labels_with_confidence, methods,
 };
 use std::path::{Path, PathBuf};
@@ -39,22 +39,11 @@ pub struct Args {
     /// Output label volume; the format follows the extension.
     #[arg(long, required_unless_present = "list")]
     pub out: Option<PathBuf>,
-    /// Interpolation method (see `--list`); the default is the best measured
-    /// one (`image-guided` when `--image` is given).
-    #[arg(long)]
-    pub method: Option<String>,
-    /// The intensity volume of the cell, on SPARSE's grid, for the image methods.
-    #[arg(long)]
-    pub image: Option<PathBuf>,
+    #[command(flatten)]
+    pub tracing: TracingArgs,
     /// Also write the confidence per voxel (f32, 0.5 = a coin toss, 1 = sure) here.
     #[arg(long)]
     pub confidence: Option<PathBuf>,
-    /// Axis the slices were drawn along.
-    #[arg(long, default_value = "z")]
-    pub axis: Axis,
-    /// File listing the drawn slice indices, one integer a line (`#` comments allowed).
-    #[arg(long)]
-    pub drawn: Option<PathBuf>,
     /// Print the available methods (the default first) and exit.
     #[arg(long)]
     pub list: bool,
@@ -62,6 +51,74 @@ pub struct Args {
     /// intensity image read as labels would run for minutes).
     #[arg(long, default_value_t = DEFAULT_MAX_LABELS)]
     pub max_labels: usize,
+}
+
+/// The options of a sparse tracing that `interpolate` and `advise` share.
+#[derive(clap::Args)]
+pub struct TracingArgs {
+    /// Interpolation method (see `interpolate --list`); the default is the
+    /// best measured one (`image-guided` when `--image` is given).
+    #[arg(long)]
+    pub method: Option<String>,
+    /// The intensity volume of the cell, on SPARSE's grid, for the image methods.
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// Axis the slices were drawn along.
+    #[arg(long, default_value = "z")]
+    pub axis: Axis,
+    /// File listing the drawn slice indices, one integer a line (`#` comments allowed).
+    #[arg(long)]
+    pub drawn: Option<PathBuf>,
+}
+
+/// A sparse label volume read for `interpolate` or `advise`: the file's
+/// volume (its voxel type is the output's), its labels, the method (the
+/// image-aware one with `--image`) and the drawn slices.
+pub struct SparseInput {
+    pub volume: AnyVolume,
+    pub sparse: LabelVolume,
+    pub method: Box<dyn Interpolator>,
+    pub image: Option<Arc<Volume<f32>>>,
+    pub drawn: Vec<usize>,
+}
+
+impl TracingArgs {
+    /// Read `path` (through `series` for DICOM) and everything these
+    /// options name; an error when more than `max_labels` labels are drawn.
+    pub fn read(
+        &self,
+        path: &Path,
+        series: &crate::series::SeriesArg,
+        max_labels: usize,
+    ) -> Result<SparseInput> {
+        let volume = series
+            .read_volume(path)
+            .with_context(|| format!("reading {}", path.display()))?;
+        let sparse = volume
+            .to_labels()
+            .with_context(|| format!("{} is not a label volume", path.display()))?;
+        let image = match &self.image {
+            Some(p) => Some(Arc::new(read_image(p, &sparse)?)),
+            None => None,
+        };
+        let method = by_name_with_image(self.method.as_deref(), image.clone())?;
+        let drawn = drawn_slices(&sparse, self.axis, self.drawn.as_deref())?;
+        let labels = interslice_interp::labels::drawn_labels(&sparse, self.axis, &drawn).len();
+        if labels > max_labels {
+            bail!(
+                "{} has {labels} labels on its drawn slices, more than --max-labels {max_labels} \
+                 (is it an intensity image? pass --max-labels {labels} to interpolate every one)",
+                path.display(),
+            );
+        }
+        Ok(SparseInput {
+            volume,
+            sparse,
+            method,
+            image,
+            drawn,
+        })
+    }
 }
 
 /// Default of `--max-labels`: every label an 8-bit label volume can hold.
@@ -91,35 +148,21 @@ pub fn run(a: Args) -> Result<()> {
     if interslice_project::contour_files::is_contours_file(&sparse_path) {
         return interpolate_contours(&sparse_path, &out, &a);
     }
-    let input = a
-        .series
-        .read_volume(&sparse_path)
-        .with_context(|| format!("reading {}", sparse_path.display()))?;
-    let sparse = input
-        .to_labels()
-        .with_context(|| format!("{} is not a label volume", sparse_path.display()))?;
-    let image = match &a.image {
-        Some(p) => Some(Arc::new(read_image(p, &sparse)?)),
-        None => None,
-    };
-    let method = by_name_with_image(a.method.as_deref(), image)?;
+    let SparseInput {
+        volume: input,
+        sparse,
+        method,
+        drawn,
+        ..
+    } = a.tracing.read(&sparse_path, &a.series, a.max_labels)?;
+    let axis = a.tracing.axis;
     let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
-    let drawn = drawn_slices(&sparse, a.axis, a.drawn.as_deref())?;
-    let labels = interslice_interp::labels::drawn_labels(&sparse, a.axis, &drawn).len();
-    if labels > a.max_labels {
-        bail!(
-            "{} has {labels} labels on its drawn slices, more than --max-labels {} \
-             (is it an intensity image? pass --max-labels {labels} to interpolate every one)",
-            sparse_path.display(),
-            a.max_labels
-        );
-    }
     let (result, confidence) = if a.confidence.is_some() {
-        let (l, c) = interpolate_labels_with_confidence(method.as_ref(), &sparse, a.axis, &drawn)
+        let (l, c) = interpolate_labels_with_confidence(method.as_ref(), &sparse, axis, &drawn)
             .with_context(|| format!("method {}", method.name()))?;
         (l, Some(c))
     } else {
-        let l = interpolate_labels(method.as_ref(), &sparse, a.axis, &drawn)
+        let l = interpolate_labels(method.as_ref(), &sparse, axis, &drawn)
             .with_context(|| format!("method {}", method.name()))?;
         (l, None)
     };
@@ -135,7 +178,7 @@ pub fn run(a: Args) -> Result<()> {
         "{}: {} drawn slices along {}, {:.2} s -> {}",
         method.name(),
         drawn.len(),
-        a.axis,
+        axis,
         started.elapsed().as_secs_f64(),
         out.display()
     );
@@ -145,7 +188,7 @@ pub fn run(a: Args) -> Result<()> {
 /// `interpolate CONTOURS.json --out OUT`: the label volume of a contours file.
 fn interpolate_contours(path: &Path, out: &Path, a: &Args) -> Result<()> {
     let max_labels = a.max_labels;
-    if a.image.is_some() || a.confidence.is_some() || a.drawn.is_some() {
+    if a.tracing.image.is_some() || a.confidence.is_some() || a.tracing.drawn.is_some() {
         bail!(
             "--image, --confidence and --drawn apply to label volumes; a contours file \
              carries its drawn slices and every axis (rasterize it with `contours rasterize` \
@@ -167,7 +210,7 @@ fn interpolate_contours(path: &Path, out: &Path, a: &Args) -> Result<()> {
             labels.len()
         );
     }
-    let method = interslice_project::methods::method_by_name(a.method.as_deref())?;
+    let method = interslice_project::methods::method_by_name(a.tracing.method.as_deref())?;
     let spin = crate::progress::spinner(&format!("interpolating with {}", method.name()));
     let name = path.display().to_string();
     let result = interslice_project::contour_files::interpolate(
