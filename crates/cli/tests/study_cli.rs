@@ -65,6 +65,76 @@ fn study_writes_csv_json_plots_and_summary() {
 }
 
 #[test]
+fn strategy_study_compares_uniform_and_advised_slices() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
+        size: 48,
+        seed: 3,
+        bits: 8,
+        noise: 0.0,
+    })
+    .unwrap();
+    let gt = dir.path().join("gt.nii.gz");
+    interslice_io::write_labels(&gt, &p.labels).unwrap();
+    let out = dir.path().join("strategy");
+    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
+        .arg("study")
+        .arg(&gt)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--strategy",
+            "uniform,advised",
+            "--budget",
+            "2..4",
+            "--label",
+            "1",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let csv = std::fs::read_to_string(out.join("strategy.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 6, "{csv}");
+    for row in &rows {
+        let budget: usize = row[1].parse().unwrap();
+        let traced: usize = row[2].parse().unwrap();
+        assert_eq!(traced, budget + 2, "{csv}");
+        let slices: Vec<usize> = row[5].split(' ').map(|s| s.parse().unwrap()).collect();
+        assert_eq!(slices.len(), traced);
+        assert!(slices.windows(2).all(|w| w[0] < w[1]), "{csv}");
+        for dice in [row[3], row[4]] {
+            let d: f64 = dice.parse().unwrap();
+            assert!(d > 0.5 && d <= 1.0, "{csv}");
+        }
+    }
+    // The same outermost slices for both strategies.
+    let ends = |r: &Vec<&str>| {
+        let s: Vec<&str> = r[5].split(' ').collect();
+        (s[0].to_string(), s[s.len() - 1].to_string())
+    };
+    assert!(rows.iter().all(|r| ends(r) == ends(&rows[0])));
+    let md = std::fs::read_to_string(out.join("strategy.md")).unwrap();
+    assert!(md.contains("| 4 | 6 |"), "{md}");
+    // An unknown strategy is a one-line error.
+    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
+        .arg("study")
+        .arg(&gt)
+        .arg("--out")
+        .arg(&out)
+        .args(["--strategy", "random"])
+        .output()
+        .unwrap();
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("unknown strategy 'random'"));
+}
+
+#[test]
 fn study_rejects_bad_arguments() {
     let dir = tempfile::tempdir().unwrap();
     let run = |args: &[&str]| {

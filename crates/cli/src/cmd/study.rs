@@ -43,6 +43,15 @@ pub struct Args {
     /// `--label` resolved to its value (set by `run`).
     #[arg(skip)]
     pub label: Option<u16>,
+    /// Instead of dropping slices: simulate a tracer who traces the outermost
+    /// slices and then `--budget` more chosen by these strategies
+    /// (`uniform`, `advised`), and compare the Dice (strategy.csv, strategy.md).
+    #[arg(long, value_delimiter = ',')]
+    pub strategy: Option<Vec<String>>,
+    /// Slices traced after the outermost two, for `--strategy`: a range
+    /// `A..B` (inclusive) or a list.
+    #[arg(long, default_value = "4..12")]
+    pub budget: String,
     /// NSD tolerance in physical units.
     #[arg(long, default_value_t = interslice_core::metrics::DEFAULT_TOLERANCE)]
     pub tolerance: f64,
@@ -102,6 +111,9 @@ pub fn run(mut a: Args) -> Result<()> {
         ),
     };
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    if let Some(names) = &a.strategy {
+        return run_strategies(&a, names, &gt, image, first, last, &labels);
+    }
 
     let jobs: Vec<(usize, usize)> = (0..chosen.len())
         .flat_map(|m| skips.iter().map(move |&k| (m, k)))
@@ -222,6 +234,53 @@ fn provenance(a: &Args) -> Provenance {
     }
     let commands = phantom.iter().cloned().chain([study]).collect();
     Provenance { phantom, commands }
+}
+
+/// `study --strategy`: uniform against advised slice choice at every budget.
+fn run_strategies(
+    a: &Args,
+    names: &[String],
+    gt: &interslice_core::LabelVolume,
+    image: Option<std::sync::Arc<interslice_core::Volume<f32>>>,
+    first: usize,
+    last: usize,
+    labels: &[u16],
+) -> Result<()> {
+    use interslice_project::report::strategy::{Simulation, Strategy, write};
+    let strategies: Vec<Strategy> = names
+        .iter()
+        .map(|n| Strategy::of_name(n))
+        .collect::<Result<_, _>>()?;
+    let budgets = parse_skips(&a.budget).context("--budget")?;
+    let method = a.methods.as_ref().and_then(|m| m.first()).map(|m| m.trim());
+    let sim = Simulation {
+        gt,
+        axis: a.axis,
+        first,
+        last,
+        labels,
+        method,
+        image,
+    };
+    let started = Instant::now();
+    let rows = sim.run(&strategies, &budgets)?;
+    write(&a.out, &rows)?;
+    for r in &rows {
+        println!(
+            "{:<8} budget {:>2}: {:>2} traced slices, Dice skipped {:.4}, volume {:.4}",
+            r.strategy.name(),
+            r.budget,
+            r.traced.len(),
+            r.dice_skipped,
+            r.dice_volume
+        );
+    }
+    println!(
+        "{:.1} s -> {}",
+        started.elapsed().as_secs_f64(),
+        a.out.join("strategy.md").display()
+    );
+    Ok(())
 }
 
 #[cfg(test)]
