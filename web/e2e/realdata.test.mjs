@@ -112,6 +112,31 @@ after(async () => {
 
 const num = async (testid) => Number(await br.page.getByTestId(testid).inputValue());
 
+/** Every view of an MR shows anatomy: structure, not noise, neither black nor white. */
+async function showsMrAnatomy(page) {
+  for (const a of ["z", "y", "x"]) {
+    const s = await viewStats(page, a);
+    assert.ok(
+      s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5,
+      `view ${a} shows anatomy: ${JSON.stringify(s)}`,
+    );
+  }
+}
+
+/** The status line shows the raw value of a z-view voxel whose value lies in `lo..hi`. */
+async function showsRawValueUnderCursor(page, lo, hi) {
+  const [[u, v, value]] = await pixelsIn(page, "z", lo, hi, 1);
+  const [x, y] = await page.evaluate(
+    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
+    [u, v],
+  );
+  await page.mouse.move(x, y);
+  await page
+    .getByTestId("status-value")
+    .filter({ hasText: `value ${value}` })
+    .waitFor();
+}
+
 async function open(cell) {
   const { page } = br;
   await page.goto(`${srv.url}/#/cells`);
@@ -159,16 +184,7 @@ test("the lung2 CT opens in the lung window: air black, lung grey, soft tissue w
   await page.getByTestId("window-preset").selectOption("ct-lung");
   await painted(page);
   // The value under the cursor is the raw Hounsfield value.
-  const [[u, v, hu]] = await pixelsIn(page, "z", -1100, -980, 1);
-  const [x, y] = await page.evaluate(
-    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
-    [u, v],
-  );
-  await page.mouse.move(x, y);
-  await page
-    .getByTestId("status-value")
-    .filter({ hasText: `value ${hu}` })
-    .waitFor();
+  await showsRawValueUnderCursor(page, -1100, -980);
   await shot(page, "realdata-lung2-ct");
 });
 
@@ -189,24 +205,9 @@ test("the brain1 MR opens with the percentile window and shows anatomy in all th
     lo >= cell.min && hi <= cell.max && hi - lo > (cell.max - cell.min) / 10,
     `window ${lo}..${hi} in ${cell.min}..${cell.max}`,
   );
-  for (const a of ["z", "y", "x"]) {
-    const s = await viewStats(page, a);
-    assert.ok(
-      s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5,
-      `view ${a} shows anatomy: ${JSON.stringify(s)}`,
-    );
-  }
+  await showsMrAnatomy(page);
   // Inside the head: the value under the cursor is the raw one.
-  const [[u, v, val]] = await pixelsIn(page, "z", Math.ceil(lo + (hi - lo) / 3), hi, 1);
-  const [x, y] = await page.evaluate(
-    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
-    [u, v],
-  );
-  await page.mouse.move(x, y);
-  await page
-    .getByTestId("status-value")
-    .filter({ hasText: `value ${val}` })
-    .waitFor();
+  await showsRawValueUnderCursor(page, Math.ceil(lo + (hi - lo) / 3), hi);
   await shot(page, "realdata-brain1-mr");
 });
 
@@ -291,25 +292,10 @@ test("a DICOM series (a folder of .dcm files) opens as one cell with its slice s
   assert.ok(Math.abs(cell.spacing[2] - 7.0) < 0.01, `slice spacing ${cell.spacing[2]}`);
   assert.equal(cell.unit, "mm");
   assert.equal(await page.getByTestId("window-preset").inputValue(), "auto");
-  for (const a of ["z", "y", "x"]) {
-    const s = await viewStats(page, a);
-    assert.ok(
-      s.neighbour < 0.5 && s.std > 30 && s.black < 0.9 && s.white < 0.5,
-      `view ${a} shows anatomy: ${JSON.stringify(s)}`,
-    );
-  }
-  // The slices are the voxels the CLI reads from the same folder.
+  await showsMrAnatomy(page);
+  // Inside the head: the value under the cursor is the raw one.
   const lo = await num("window-low");
   const hi = await num("window-high");
-  const [[u, v, val]] = await pixelsIn(page, "z", Math.ceil(lo + (hi - lo) / 3), hi, 1);
-  const [x, y] = await page.evaluate(
-    ([uu, vv]) => window.__interslice.tracer().sliceToClient("z", uu + 0.5, vv + 0.5),
-    [u, v],
-  );
-  await page.mouse.move(x, y);
-  await page
-    .getByTestId("status-value")
-    .filter({ hasText: `value ${val}` })
-    .waitFor();
+  await showsRawValueUnderCursor(page, Math.ceil(lo + (hi - lo) / 3), hi);
   await shot(page, "realdata-dicom-mr");
 });
