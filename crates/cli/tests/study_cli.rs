@@ -1,9 +1,10 @@
 //! `interslice study` through the binary on a small phantom: every output is
 //! written, rows cover every (method, skip, label), and k = 0 is exact.
+use std::path::PathBuf;
 use std::process::Command;
 
-#[test]
-fn study_writes_csv_json_plots_and_summary() {
+/// The exact labels of a 48³ phantom cell, written to a temporary folder.
+fn phantom_ground_truth() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
         size: 48,
@@ -14,6 +15,12 @@ fn study_writes_csv_json_plots_and_summary() {
     .unwrap();
     let gt = dir.path().join("gt.nii.gz");
     interslice_io::write_labels(&gt, &p.labels).unwrap();
+    (dir, gt)
+}
+
+#[test]
+fn study_writes_csv_json_plots_and_summary() {
+    let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("study");
     let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
         .arg("study")
@@ -66,16 +73,7 @@ fn study_writes_csv_json_plots_and_summary() {
 
 #[test]
 fn strategy_study_compares_uniform_and_advised_slices() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
-        size: 48,
-        seed: 3,
-        bits: 8,
-        noise: 0.0,
-    })
-    .unwrap();
-    let gt = dir.path().join("gt.nii.gz");
-    interslice_io::write_labels(&gt, &p.labels).unwrap();
+    let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("strategy");
     let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
         .arg("study")
