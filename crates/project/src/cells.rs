@@ -3,7 +3,7 @@
 use crate::error::ProjectError;
 use interslice_core::{AnyVolume, Volume, Voxel};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Component, Path, PathBuf};
 
 /// Folder names inside a project that never hold cells.
@@ -131,14 +131,41 @@ pub fn display_name(path: &Path) -> String {
     }
 }
 
+/// The series of a DICOM folder (`None` when it cannot be listed). Listing
+/// reads every file's header, and the cells are scanned again at every
+/// cell list, so the answer is kept while the folder's modification time
+/// (which changes when files are added, removed or renamed) stays the same.
+fn series_listed(path: &Path) -> Option<Vec<interslice_io::dicom::SeriesInfo>> {
+    type Listed = (
+        std::time::SystemTime,
+        Option<Vec<interslice_io::dicom::SeriesInfo>>,
+    );
+    static LISTED: std::sync::LazyLock<std::sync::Mutex<HashMap<PathBuf, Listed>>> =
+        std::sync::LazyLock::new(Default::default);
+    let list = || interslice_io::dicom::list_series(path).ok();
+    let Ok(modified) = std::fs::metadata(path).and_then(|m| m.modified()) else {
+        return list();
+    };
+    let cache = || LISTED.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((at, series)) = cache().get(path)
+        && *at == modified
+    {
+        return series.clone();
+    }
+    // Listed without the lock held: other folders are not kept waiting.
+    let series = list();
+    cache().insert(path.to_path_buf(), (modified, series.clone()));
+    series
+}
+
 /// The cells of a DICOM folder named `name`: the folder itself when it holds
 /// one series (or cannot be listed: reading it then reports why), else one
 /// cell per series, `NAME-s<SeriesNumber>` (`NAME-<n>` when the numbers
 /// are missing or repeat), in SeriesNumber order.
 fn dicom_cells(name: &str, path: &Path) -> Vec<(String, PathBuf)> {
     let base = id_of_name(name);
-    let series = match interslice_io::dicom::list_series(path) {
-        Ok(s) if s.len() > 1 => s,
+    let series = match series_listed(path) {
+        Some(s) if s.len() > 1 => s,
         _ => return vec![(base, path.to_path_buf())],
     };
     let numbers: Vec<Option<i64>> = series.iter().map(|s| s.number).collect();
