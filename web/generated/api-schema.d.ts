@@ -12,7 +12,7 @@ export interface paths {
             cookie?: never;
         };
         /** Cells with the user's status (queue=true hides finished ones) */
-        get: operations["get_cells"];
+        get: operations["list_cells"];
         put?: never;
         post?: never;
         delete?: never;
@@ -29,7 +29,7 @@ export interface paths {
             cookie?: never;
         };
         /** A cell's metadata, range and labels */
-        get: operations["get_cells__cell_"];
+        get: operations["cell_detail"];
         put?: never;
         post?: never;
         delete?: never;
@@ -46,10 +46,10 @@ export interface paths {
             cookie?: never;
         };
         /** The user's contours (reviewers: ?user=) */
-        get: operations["get_cells__cell__contours"];
+        get: operations["list_contours"];
         put?: never;
         /** Add a contour (client_id makes retries idempotent) */
-        post: operations["post_cells__cell__contours"];
+        post: operations["add_contour"];
         delete?: never;
         options?: never;
         head?: never;
@@ -67,7 +67,7 @@ export interface paths {
         put?: never;
         post?: never;
         /** Delete one of the user's contours */
-        delete: operations["delete_cells__cell__contours__id_"];
+        delete: operations["delete_contour"];
         options?: never;
         head?: never;
         patch?: never;
@@ -81,7 +81,7 @@ export interface paths {
             cookie?: never;
         };
         /** Drawn slices of a label along an axis */
-        get: operations["get_cells__cell__drawn"];
+        get: operations["drawn"];
         put?: never;
         post?: never;
         delete?: never;
@@ -100,7 +100,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Metrics of a test against a reference */
-        post: operations["post_cells__cell__evaluate"];
+        post: operations["evaluate"];
         delete?: never;
         options?: never;
         head?: never;
@@ -115,7 +115,7 @@ export interface paths {
             cookie?: never;
         };
         /** Download the interpolated label volume or the contours */
-        get: operations["get_cells__cell__export"];
+        get: operations["export"];
         put?: never;
         post?: never;
         delete?: never;
@@ -132,7 +132,7 @@ export interface paths {
             cookie?: never;
         };
         /** 256-bin intensity histogram */
-        get: operations["get_cells__cell__histogram"];
+        get: operations["histogram"];
         put?: never;
         post?: never;
         delete?: never;
@@ -151,7 +151,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Interpolate a label; preview contours per slice */
-        post: operations["post_cells__cell__interpolate"];
+        post: operations["interpolate"];
         delete?: never;
         options?: never;
         head?: never;
@@ -166,7 +166,7 @@ export interface paths {
             cookie?: never;
         };
         /** u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN */
-        get: operations["get_cells__cell__overlay__axis___index_"];
+        get: operations["overlay"];
         put?: never;
         post?: never;
         delete?: never;
@@ -183,10 +183,10 @@ export interface paths {
             cookie?: never;
         };
         /** Ratings of the cell's segmentations */
-        get: operations["get_cells__cell__ratings"];
+        get: operations["list_ratings"];
         put?: never;
         /** Rate a segmentation 1..5 */
-        post: operations["post_cells__cell__ratings"];
+        post: operations["add_rating"];
         delete?: never;
         options?: never;
         head?: never;
@@ -203,7 +203,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Redo the user's last undone change */
-        post: operations["post_cells__cell__redo"];
+        post: operations["redo"];
         delete?: never;
         options?: never;
         head?: never;
@@ -218,7 +218,7 @@ export interface paths {
             cookie?: never;
         };
         /** The user's stored interpolation results, newest first (reviewers: ?user=) */
-        get: operations["get_cells__cell__results"];
+        get: operations["list_results"];
         put?: never;
         post?: never;
         delete?: never;
@@ -235,7 +235,7 @@ export interface paths {
             cookie?: never;
         };
         /** Surface mesh of a result, physical units */
-        get: operations["get_cells__cell__results__result__mesh"];
+        get: operations["result_mesh"];
         put?: never;
         post?: never;
         delete?: never;
@@ -252,10 +252,10 @@ export interface paths {
             cookie?: never;
         };
         /** Computed segmentations and files under segmentations/<cell>/ */
-        get: operations["get_cells__cell__segmentations"];
+        get: operations["list_segmentations"];
         put?: never;
         /** Compute a threshold segmentation */
-        post: operations["post_cells__cell__segmentations"];
+        post: operations["add_segmentation"];
         delete?: never;
         options?: never;
         head?: never;
@@ -272,7 +272,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Upload a label volume file (body; format from ?name=) as a segmentation */
-        post: operations["post_cells__cell__segmentations_upload"];
+        post: operations["upload_segmentation"];
         delete?: never;
         options?: never;
         head?: never;
@@ -287,7 +287,7 @@ export interface paths {
             cookie?: never;
         };
         /** Raw little-endian slice pixels (X-Width, X-Height, X-Dtype) */
-        get: operations["get_cells__cell__slices__axis___index_"];
+        get: operations["slice"];
         put?: never;
         post?: never;
         delete?: never;
@@ -305,7 +305,7 @@ export interface paths {
         };
         get?: never;
         /** Replace a label's contours on a slice */
-        put: operations["put_cells__cell__slices__axis___index__contours"];
+        put: operations["replace_slice"];
         post?: never;
         delete?: never;
         options?: never;
@@ -323,7 +323,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Mark a slice drawn with no contour for a label */
-        post: operations["post_cells__cell__slices__axis___index__empty"];
+        post: operations["mark_empty"];
         delete?: never;
         options?: never;
         head?: never;
@@ -339,7 +339,7 @@ export interface paths {
         };
         get?: never;
         /** Set the user's status of a cell */
-        put: operations["put_cells__cell__status"];
+        put: operations["set_status"];
         post?: never;
         delete?: never;
         options?: never;
@@ -357,7 +357,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Add tracing time (seconds) */
-        post: operations["post_cells__cell__time"];
+        post: operations["add_time"];
         delete?: never;
         options?: never;
         head?: never;
@@ -374,7 +374,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Undo the user's last change */
-        post: operations["post_cells__cell__undo"];
+        post: operations["undo"];
         delete?: never;
         options?: never;
         head?: never;
@@ -389,10 +389,10 @@ export interface paths {
             cookie?: never;
         };
         /** The project's labels */
-        get: operations["get_labels"];
+        get: operations["labels"];
         put?: never;
         /** Add a label */
-        post: operations["post_labels"];
+        post: operations["add_label"];
         delete?: never;
         options?: never;
         head?: never;
@@ -409,7 +409,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Sign in; sets the interslice_session cookie */
-        post: operations["post_login"];
+        post: operations["login"];
         delete?: never;
         options?: never;
         head?: never;
@@ -426,7 +426,7 @@ export interface paths {
         get?: never;
         put?: never;
         /** Sign out */
-        post: operations["post_logout"];
+        post: operations["logout"];
         delete?: never;
         options?: never;
         head?: never;
@@ -441,7 +441,7 @@ export interface paths {
             cookie?: never;
         };
         /** The signed-in user */
-        get: operations["get_me"];
+        get: operations["me"];
         put?: never;
         post?: never;
         delete?: never;
@@ -458,7 +458,7 @@ export interface paths {
             cookie?: never;
         };
         /** Interpolation methods, the default first */
-        get: operations["get_methods"];
+        get: operations["methods"];
         put?: never;
         post?: never;
         delete?: never;
@@ -475,7 +475,7 @@ export interface paths {
             cookie?: never;
         };
         /** This document */
-        get: operations["get_openapi_json"];
+        get: operations["serve"];
         put?: never;
         post?: never;
         delete?: never;
@@ -492,7 +492,7 @@ export interface paths {
             cookie?: never;
         };
         /** Each user's status, seconds and contour count per cell (reviewers: everyone; tracers: their own) */
-        get: operations["get_progress"];
+        get: operations["progress"];
         put?: never;
         post?: never;
         delete?: never;
@@ -773,7 +773,7 @@ export interface components {
 }
 export type $defs = Record<string, never>;
 export interface operations {
-    get_cells: {
+    list_cells: {
         parameters: {
             query?: never;
             header?: never;
@@ -788,7 +788,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": unknown;
+                    "application/json": components["schemas"]["CellSummary"][];
                 };
             };
             /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
@@ -800,11 +800,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell_: {
+    cell_detail: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -829,11 +830,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__contours: {
+    list_contours: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -858,11 +860,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__contours: {
+    add_contour: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -874,7 +877,7 @@ export interface operations {
         };
         responses: {
             /** @description success */
-            200: {
+            201: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -891,13 +894,15 @@ export interface operations {
             };
         };
     };
-    delete_cells__cell__contours__id_: {
+    delete_contour: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
-                id: string;
+                /** @description contour id */
+                id: number;
             };
             cookie?: never;
         };
@@ -919,11 +924,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__drawn: {
+    drawn: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -948,11 +954,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__evaluate: {
+    evaluate: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -981,11 +988,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__export: {
+    export: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1010,11 +1018,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__histogram: {
+    histogram: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1039,11 +1048,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__interpolate: {
+    interpolate: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1060,7 +1070,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": unknown;
+                    "application/json": components["schemas"]["InterpolateAnswer"];
                 };
             };
             /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
@@ -1072,14 +1082,17 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__overlay__axis___index_: {
+    overlay: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
+                /** @description x, y or z */
                 axis: string;
-                index: string;
+                /** @description slice index along the axis */
+                index: number;
             };
             cookie?: never;
         };
@@ -1103,11 +1116,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__ratings: {
+    list_ratings: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1132,11 +1146,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__ratings: {
+    add_rating: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1148,7 +1163,7 @@ export interface operations {
         };
         responses: {
             /** @description success */
-            200: {
+            201: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -1165,11 +1180,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__redo: {
+    redo: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1194,12 +1210,45 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__results: {
+    list_results: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description success */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ResultInfo"][];
+                };
+            };
+            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
+            "4XX": {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+        };
+    };
+    result_mesh: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description cell id (GET /api/cells) */
+                cell: string;
+                /** @description result id */
+                result: number;
             };
             cookie?: never;
         };
@@ -1223,41 +1272,12 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__results__result__mesh: {
+    list_segmentations: {
         parameters: {
             query?: never;
             header?: never;
             path: {
-                cell: string;
-                result: string;
-            };
-            cookie?: never;
-        };
-        requestBody?: never;
-        responses: {
-            /** @description success */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": unknown;
-                };
-            };
-            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
-            "4XX": {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content?: never;
-            };
-        };
-    };
-    get_cells__cell__segmentations: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1270,7 +1290,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": unknown;
+                    "application/json": components["schemas"]["SegmentationInfo"][];
                 };
             };
             /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
@@ -1282,11 +1302,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__segmentations: {
+    add_segmentation: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1298,7 +1319,7 @@ export interface operations {
         };
         responses: {
             /** @description success */
-            200: {
+            201: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -1315,11 +1336,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__segmentations_upload: {
+    upload_segmentation: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1327,7 +1349,7 @@ export interface operations {
         requestBody?: never;
         responses: {
             /** @description success */
-            200: {
+            201: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -1344,14 +1366,17 @@ export interface operations {
             };
         };
     };
-    get_cells__cell__slices__axis___index_: {
+    slice: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
+                /** @description x, y or z */
                 axis: string;
-                index: string;
+                /** @description slice index along the axis */
+                index: number;
             };
             cookie?: never;
         };
@@ -1375,14 +1400,17 @@ export interface operations {
             };
         };
     };
-    put_cells__cell__slices__axis___index__contours: {
+    replace_slice: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
+                /** @description x, y or z */
                 axis: string;
-                index: string;
+                /** @description slice index along the axis */
+                index: number;
             };
             cookie?: never;
         };
@@ -1410,14 +1438,17 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__slices__axis___index__empty: {
+    mark_empty: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
+                /** @description x, y or z */
                 axis: string;
-                index: string;
+                /** @description slice index along the axis */
+                index: number;
             };
             cookie?: never;
         };
@@ -1441,11 +1472,12 @@ export interface operations {
             };
         };
     };
-    put_cells__cell__status: {
+    set_status: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1470,11 +1502,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__time: {
+    add_time: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1499,11 +1532,12 @@ export interface operations {
             };
         };
     };
-    post_cells__cell__undo: {
+    undo: {
         parameters: {
             query?: never;
             header?: never;
             path: {
+                /** @description cell id (GET /api/cells) */
                 cell: string;
             };
             cookie?: never;
@@ -1528,7 +1562,7 @@ export interface operations {
             };
         };
     };
-    get_labels: {
+    labels: {
         parameters: {
             query?: never;
             header?: never;
@@ -1555,7 +1589,7 @@ export interface operations {
             };
         };
     };
-    post_labels: {
+    add_label: {
         parameters: {
             query?: never;
             header?: never;
@@ -1569,7 +1603,7 @@ export interface operations {
         };
         responses: {
             /** @description success */
-            200: {
+            201: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -1586,7 +1620,7 @@ export interface operations {
             };
         };
     };
-    post_login: {
+    login: {
         parameters: {
             query?: never;
             header?: never;
@@ -1617,7 +1651,7 @@ export interface operations {
             };
         };
     };
-    post_logout: {
+    logout: {
         parameters: {
             query?: never;
             header?: never;
@@ -1642,7 +1676,61 @@ export interface operations {
             };
         };
     };
-    get_me: {
+    me: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description success */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Me"];
+                };
+            };
+            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
+            "4XX": {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+        };
+    };
+    methods: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description success */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["MethodInfo"][];
+                };
+            };
+            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
+            "4XX": {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+        };
+    };
+    serve: {
         parameters: {
             query?: never;
             header?: never;
@@ -1669,61 +1757,7 @@ export interface operations {
             };
         };
     };
-    get_methods: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        requestBody?: never;
-        responses: {
-            /** @description success */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": unknown;
-                };
-            };
-            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
-            "4XX": {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content?: never;
-            };
-        };
-    };
-    get_openapi_json: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        requestBody?: never;
-        responses: {
-            /** @description success */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": unknown;
-                };
-            };
-            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
-            "4XX": {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content?: never;
-            };
-        };
-    };
-    get_progress: {
+    progress: {
         parameters: {
             query?: never;
             header?: never;

@@ -1,6 +1,7 @@
 //! Sign-in: the session cookie, the current-user extractor, login/logout/me.
 use crate::SharedState;
 use crate::error::{ApiError, ApiJson};
+use crate::openapi::ERRORS;
 use axum::extract::{FromRequestParts, State};
 use axum::http::header::{COOKIE, SET_COOKIE};
 use axum::http::request::Parts;
@@ -88,6 +89,17 @@ fn cookie(token: &str, max_age: i64) -> HeaderValue {
 }
 
 /// `POST /api/login`.
+#[utoipa::path(
+    post,
+    path = "/api/login",
+    tag = "session",
+    summary = "Sign in; sets the interslice_session cookie",
+    request_body = LoginBody,
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub async fn login(
     State(state): State<SharedState>,
     ApiJson(body): ApiJson<LoginBody>,
@@ -115,6 +127,16 @@ pub async fn login(
 }
 
 /// `POST /api/logout`.
+#[utoipa::path(
+    post,
+    path = "/api/logout",
+    tag = "session",
+    summary = "Sign out",
+    responses(
+        (status = 204, description = "done"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub async fn logout(
     State(state): State<SharedState>,
     headers: HeaderMap,
@@ -128,6 +150,16 @@ pub async fn logout(
 }
 
 /// `GET /api/me`.
+#[utoipa::path(
+    get,
+    path = "/api/me",
+    tag = "session",
+    summary = "The signed-in user",
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = Me),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub async fn me(State(state): State<SharedState>, Auth(user): Auth) -> axum::Json<Me> {
     axum::Json(Me {
         name: user.name,

@@ -193,6 +193,7 @@ pub fn app(state: SharedState, config: &Config) -> Router {
     let limit = config.timeout;
     let hosts = state.hosts.clone();
     api::router()
+        .0
         .merge(web::router())
         .layer(axum::extract::DefaultBodyLimit::max(config.body_limit))
         .layer(axum::middleware::from_fn(move |req, next| {

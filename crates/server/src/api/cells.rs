@@ -70,6 +70,16 @@ pub(super) async fn summary(
     })
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells",
+    tag = "cells",
+    summary = "Cells with the user's status (queue=true hides finished ones)",
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = Vec<CellSummary>),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn list_cells(
     State(state): State<SharedState>,
     Auth(user): Auth,
@@ -124,6 +134,16 @@ pub(super) async fn list_cells(
 
 /// The campaign at a glance: each user's status, time and contour count per
 /// cell. Reviewers see every user; a tracer sees their own rows.
+#[utoipa::path(
+    get,
+    path = "/api/progress",
+    tag = "cells",
+    summary = "Each user's status, seconds and contour count per cell (reviewers: everyone; tracers: their own)",
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn progress(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -149,6 +169,19 @@ pub struct CellDetail {
     pub origin: [f64; 3],
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}",
+    tag = "cells",
+    summary = "A cell's metadata, range and labels",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn cell_detail(
     State(state): State<SharedState>,
     Auth(user): Auth,
@@ -171,6 +204,19 @@ pub(super) struct StatusBody {
     status: String,
 }
 
+#[utoipa::path(
+    put,
+    path = "/api/cells/{cell}/status",
+    tag = "cells",
+    summary = "Set the user's status of a cell",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn set_status(
     State(state): State<SharedState>,
     Auth(user): Auth,
@@ -184,6 +230,19 @@ pub(super) async fn set_status(
     Ok(Json(serde_json::json!({"status": s.as_str()})).into_response())
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/histogram",
+    tag = "cells",
+    summary = "256-bin intensity histogram",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn histogram(
     State(state): State<SharedState>,
     _a: Auth,
@@ -201,6 +260,19 @@ pub(super) struct TimeBody {
     seconds: f64,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/time",
+    tag = "cells",
+    summary = "Add tracing time (seconds)",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn add_time(
     State(state): State<SharedState>,
     Auth(user): Auth,
@@ -212,6 +284,21 @@ pub(super) async fn add_time(
     Ok(Json(serde_json::json!({"total_seconds": total})).into_response())
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/slices/{axis}/{index}",
+    tag = "cells",
+    summary = "Raw little-endian slice pixels (X-Width, X-Height, X-Dtype)",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("axis" = String, Path, description = "x, y or z"),
+        ("index" = usize, Path, description = "slice index along the axis"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/octet-stream"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn slice(
     State(state): State<SharedState>,
     _a: Auth,

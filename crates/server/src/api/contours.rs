@@ -9,6 +9,19 @@ pub(super) struct ContoursQuery {
     user: Option<String>,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/contours",
+    tag = "contours",
+    summary = "The user's contours (reviewers: ?user=)",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn list_contours(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -55,6 +68,20 @@ pub struct AddContour {
     pub client_id: Option<String>,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/contours",
+    tag = "contours",
+    summary = "Add a contour (client_id makes retries idempotent)",
+    request_body = AddContour,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 201, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn add_contour(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -99,6 +126,22 @@ pub struct ReplaceSlice {
     pub contours: Vec<NewContour>,
 }
 
+#[utoipa::path(
+    put,
+    path = "/api/cells/{cell}/slices/{axis}/{index}/contours",
+    tag = "contours",
+    summary = "Replace a label's contours on a slice",
+    request_body = ReplaceSlice,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("axis" = String, Path, description = "x, y or z"),
+        ("index" = usize, Path, description = "slice index along the axis"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn replace_slice(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -118,6 +161,20 @@ pub(super) async fn replace_slice(
     Ok(Json(state.store.replace_slice(&key, body.contours)?))
 }
 
+#[utoipa::path(
+    delete,
+    path = "/api/cells/{cell}/contours/{id}",
+    tag = "contours",
+    summary = "Delete one of the user's contours",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("id" = i64, Path, description = "contour id"),
+    ),
+    responses(
+        (status = 204, description = "done"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn delete_contour(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -136,6 +193,21 @@ pub(super) struct LabelBody {
     label: u16,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/slices/{axis}/{index}/empty",
+    tag = "contours",
+    summary = "Mark a slice drawn with no contour for a label",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("axis" = String, Path, description = "x, y or z"),
+        ("index" = usize, Path, description = "slice index along the axis"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn mark_empty(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -164,6 +236,19 @@ pub(super) struct DrawnQuery {
     user: Option<String>,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/drawn",
+    tag = "contours",
+    summary = "Drawn slices of a label along an axis",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn drawn(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -176,6 +261,19 @@ pub(super) async fn drawn(
     Ok(Json(state.store.drawn(&cell, target.id, q.label, axis)?).into_response())
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/undo",
+    tag = "contours",
+    summary = "Undo the user's last change",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn undo(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -186,6 +284,19 @@ pub(super) async fn undo(
     Ok(undo_json(o))
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/redo",
+    tag = "contours",
+    summary = "Redo the user's last undone change",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn redo(
     State(state): State<SharedState>,
     Auth(me): Auth,

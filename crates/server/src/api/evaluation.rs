@@ -126,6 +126,20 @@ pub(super) fn resolve_source(
     Ok(Arc::new(as_label(v, label)))
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/evaluate",
+    tag = "evaluation",
+    summary = "Metrics of a test against a reference",
+    request_body = EvaluateBody,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn evaluate(
     State(state): State<SharedState>,
     Auth(me): Auth,

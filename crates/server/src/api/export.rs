@@ -16,6 +16,19 @@ pub(super) struct ExportQuery {
     label: Option<u16>,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/export",
+    tag = "interpolation",
+    summary = "Download the interpolated label volume or the contours",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/octet-stream"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn export(
     State(state): State<SharedState>,
     Auth(me): Auth,

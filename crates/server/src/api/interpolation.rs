@@ -50,6 +50,20 @@ pub struct InterpolateAnswer {
     pub voxels: u64,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/interpolate",
+    tag = "interpolation",
+    summary = "Interpolate a label; preview contours per slice",
+    request_body = InterpolateBody,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = InterpolateAnswer),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn interpolate(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -136,6 +150,19 @@ pub struct ResultInfo {
     pub created: String,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/results",
+    tag = "interpolation",
+    summary = "The user's stored interpolation results, newest first (reviewers: ?user=)",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = Vec<ResultInfo>),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn list_results(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -161,6 +188,20 @@ pub(super) async fn list_results(
     ))
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/results/{result}/mesh",
+    tag = "interpolation",
+    summary = "Surface mesh of a result, physical units",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("result" = i64, Path, description = "result id"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn result_mesh(
     State(state): State<SharedState>,
     Auth(me): Auth,

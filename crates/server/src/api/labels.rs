@@ -10,6 +10,16 @@ pub struct MethodInfo {
     pub description: String,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/methods",
+    tag = "interpolation",
+    summary = "Interpolation methods, the default first",
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = Vec<MethodInfo>),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn methods() -> Json<Vec<MethodInfo>> {
     Json(
         interslice_project::methods::method_list()
@@ -19,6 +29,16 @@ pub(super) async fn methods() -> Json<Vec<MethodInfo>> {
     )
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/labels",
+    tag = "labels",
+    summary = "The project's labels",
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn labels(
     State(state): State<SharedState>,
     _a: Auth,
@@ -36,6 +56,17 @@ pub struct NewLabel {
     pub color: Option<String>,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/labels",
+    tag = "labels",
+    summary = "Add a label",
+    request_body = NewLabel,
+    responses(
+        (status = 201, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn add_label(
     State(state): State<SharedState>,
     Auth(user): Auth,

@@ -1,12 +1,13 @@
 //! The handlers of `docs/API.md`.
+use crate::SharedState;
 use crate::auth::{self, Auth, reader_target};
 use crate::error::{ApiError, ApiJson, ApiPath, ApiQuery};
-use crate::{SharedState, openapi};
+use crate::openapi::{self, ERRORS};
 use axum::Router;
 use axum::extract::State;
 use axum::http::{HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{delete, get, post, put};
+use axum::routing::get;
 use interslice_core::{AnyVolume, Axis, Cancel, Geometry, LabelVolume};
 use interslice_project::cells::{LoadedCell, safe_relative_path};
 use interslice_project::export::readable_result;
@@ -15,6 +16,8 @@ use interslice_project::methods::method_by_name;
 use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredContour, User};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+use utoipa::openapi::{OpenApi, OpenApiBuilder};
+use utoipa_axum::{router::OpenApiRouter, routes};
 
 use axum::Json;
 
@@ -34,58 +37,45 @@ pub use interpolation::*;
 pub use labels::*;
 pub use segmentations::*;
 
-/// Every API route.
-pub fn router() -> Router<SharedState> {
-    Router::new()
-        .route("/api/login", post(auth::login))
-        .route("/api/logout", post(auth::logout))
-        .route("/api/me", get(auth::me))
-        .route("/api/openapi.json", get(openapi::serve))
-        .route("/api/methods", get(methods))
-        .route("/api/labels", get(labels).post(add_label))
-        .route("/api/cells", get(list_cells))
-        .route("/api/progress", get(progress))
-        .route("/api/cells/{cell}", get(cell_detail))
-        .route("/api/cells/{cell}/status", put(set_status))
-        .route("/api/cells/{cell}/histogram", get(histogram))
-        .route("/api/cells/{cell}/time", post(add_time))
-        .route("/api/cells/{cell}/slices/{axis}/{index}", get(slice))
-        .route(
-            "/api/cells/{cell}/contours",
-            get(list_contours).post(add_contour),
-        )
-        .route("/api/cells/{cell}/contours/{id}", delete(delete_contour))
-        .route(
-            "/api/cells/{cell}/slices/{axis}/{index}/contours",
-            put(replace_slice),
-        )
-        .route(
-            "/api/cells/{cell}/slices/{axis}/{index}/empty",
-            post(mark_empty),
-        )
-        .route("/api/cells/{cell}/drawn", get(drawn))
-        .route("/api/cells/{cell}/undo", post(undo))
-        .route("/api/cells/{cell}/redo", post(redo))
-        .route("/api/cells/{cell}/interpolate", post(interpolate))
-        .route("/api/cells/{cell}/results", get(list_results))
-        .route("/api/cells/{cell}/results/{result}/mesh", get(result_mesh))
-        .route("/api/cells/{cell}/export", get(export))
-        .route("/api/cells/{cell}/evaluate", post(evaluate))
-        .route(
-            "/api/cells/{cell}/segmentations",
-            get(list_segmentations).post(add_segmentation),
-        )
-        .route(
-            "/api/cells/{cell}/segmentations/upload",
-            post(upload_segmentation),
-        )
-        .route("/api/cells/{cell}/overlay/{axis}/{index}", get(overlay))
-        .route(
-            "/api/cells/{cell}/ratings",
-            get(list_ratings).post(add_rating),
-        )
+/// Every API route, and the OpenAPI document collected from their
+/// `#[utoipa::path]` declarations ([`crate::openapi`]).
+pub fn router() -> (Router<SharedState>, OpenApi) {
+    let (router, doc) =
+        OpenApiRouter::with_openapi(OpenApiBuilder::new().info(openapi::info()).build())
+            .routes(routes!(auth::login))
+            .routes(routes!(auth::logout))
+            .routes(routes!(auth::me))
+            .routes(routes!(openapi::serve))
+            .routes(routes!(methods))
+            .routes(routes!(labels, add_label))
+            .routes(routes!(list_cells))
+            .routes(routes!(progress))
+            .routes(routes!(cell_detail))
+            .routes(routes!(set_status))
+            .routes(routes!(histogram))
+            .routes(routes!(add_time))
+            .routes(routes!(slice))
+            .routes(routes!(list_contours, add_contour))
+            .routes(routes!(delete_contour))
+            .routes(routes!(replace_slice))
+            .routes(routes!(mark_empty))
+            .routes(routes!(drawn))
+            .routes(routes!(undo))
+            .routes(routes!(redo))
+            .routes(routes!(interpolate))
+            .routes(routes!(list_results))
+            .routes(routes!(result_mesh))
+            .routes(routes!(export))
+            .routes(routes!(evaluate))
+            .routes(routes!(list_segmentations, add_segmentation))
+            .routes(routes!(upload_segmentation))
+            .routes(routes!(overlay))
+            .routes(routes!(list_ratings, add_rating))
+            .split_for_parts();
+    let router = router
         .route("/api", get(api_not_found))
-        .route("/api/{*rest}", axum::routing::any(api_not_found))
+        .route("/api/{*rest}", axum::routing::any(api_not_found));
+    (router, doc)
 }
 
 async fn api_not_found() -> ApiError {

@@ -73,6 +73,19 @@ pub(super) fn load_segmentation(
         .ok_or_else(|| ApiError::not_found(format!("no segmentation '{id}' on cell '{cell}'")))
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/segmentations",
+    tag = "evaluation",
+    summary = "Computed segmentations and files under segmentations/<cell>/",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = Vec<SegmentationInfo>),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn list_segmentations(
     State(state): State<SharedState>,
     _a: Auth,
@@ -105,6 +118,19 @@ pub(super) struct UploadQuery {
 /// `POST /api/cells/{cell}/segmentations/upload?name=FILE`: the body is a
 /// label volume file (its format from `name`'s extension) on the cell's grid;
 /// it is stored like a computed segmentation and evaluated or rated by its id.
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/segmentations/upload",
+    tag = "evaluation",
+    summary = "Upload a label volume file (body; format from ?name=) as a segmentation",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 201, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn upload_segmentation(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -164,6 +190,20 @@ pub struct SegmentBody {
     pub fill_holes: Option<bool>,
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/segmentations",
+    tag = "evaluation",
+    summary = "Compute a threshold segmentation",
+    request_body = SegmentBody,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 201, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn add_segmentation(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -225,6 +265,21 @@ pub(super) struct OverlayQuery {
     method: Option<String>,
 }
 
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/overlay/{axis}/{index}",
+    tag = "evaluation",
+    summary = "u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        ("axis" = String, Path, description = "x, y or z"),
+        ("index" = usize, Path, description = "slice index along the axis"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/octet-stream"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn overlay(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -284,6 +339,19 @@ pub struct RatingBody {
 
 /// A cell's ratings: a rating and its comment belong to their author and the
 /// reviewers, so a tracer sees only their own.
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/ratings",
+    tag = "evaluation",
+    summary = "Ratings of the cell's segmentations",
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn list_ratings(
     State(state): State<SharedState>,
     Auth(me): Auth,
@@ -297,6 +365,20 @@ pub(super) async fn list_ratings(
     Ok(Json(ratings).into_response())
 }
 
+#[utoipa::path(
+    post,
+    path = "/api/cells/{cell}/ratings",
+    tag = "evaluation",
+    summary = "Rate a segmentation 1..5",
+    request_body = RatingBody,
+    params(
+        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+    ),
+    responses(
+        (status = 201, description = "success", content_type = "application/json"),
+        (status = "4XX", description = ERRORS),
+    ),
+)]
 pub(super) async fn add_rating(
     State(state): State<SharedState>,
     Auth(me): Auth,
