@@ -299,6 +299,39 @@ pub fn write_volume(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
     }
 }
 
+/// The bytes [`write_volume`] would write to a file named `name`, made in
+/// memory (downloads, uploads to other services): one-file formats only
+/// (`.nii`, `.nii.gz`, `.nrrd`, `.mha`, `.tif`/`.tiff`).
+pub fn write_volume_bytes(name: &str, v: &AnyVolume) -> Result<Vec<u8>, IoError> {
+    let path = Path::new(name);
+    let mut out = std::io::Cursor::new(Vec::new());
+    match Format::of_path(path)? {
+        Format::Nifti => nii::encode(&mut out, path, v, false)?,
+        Format::NiftiGz => nii::encode(&mut out, path, v, true)?,
+        Format::Nrrd => nrrd::encode(&mut out, path, v, &[])?,
+        Format::Mha => meta::encode_mha(&mut out, path, v)?,
+        Format::Tiff => tiff_stack::encode(&mut out, path, v)?,
+        Format::Nhdr | Format::Mhd | Format::SliceFolder | Format::Dicom => {
+            return Err(IoError::unsupported(
+                path,
+                "in memory only one-file formats are written (.nii, .nii.gz, .nrrd, .mha, .tif)",
+            ));
+        }
+    }
+    Ok(out.into_inner())
+}
+
+/// A label volume in its narrowest voxel type: u8 when the largest label is
+/// at most 255 (what most viewers expect of a segmentation), else u16.
+pub(crate) fn narrowest(v: &LabelVolume) -> AnyVolume {
+    if v.data().iter().all(|&x| x <= u16::from(u8::MAX)) {
+        let data: Vec<u8> = v.data().iter().map(|&x| x as u8).collect();
+        AnyVolume::U8(Volume::from_vec(v.geometry().clone(), data).expect("same length"))
+    } else {
+        AnyVolume::U16(v.clone())
+    }
+}
+
 /// Read a label volume: [`read_volume`] then [`AnyVolume::to_labels`]
 /// (integer values 0..=65535; anything else is an error).
 pub fn read_labels(path: &Path) -> Result<LabelVolume, IoError> {
@@ -315,13 +348,11 @@ pub fn read_labels_series(path: &Path, series: Option<&str>) -> Result<LabelVolu
 /// Write a label volume, stored as u8 when the largest label is at most 255
 /// (what most viewers expect of a segmentation), else as u16.
 pub fn write_labels(path: &Path, v: &LabelVolume) -> Result<(), IoError> {
-    let max = v.data().iter().copied().max().unwrap_or(0);
-    if max <= u16::from(u8::MAX) {
-        let g = v.geometry().clone();
-        let data: Vec<u8> = v.data().iter().map(|&x| x as u8).collect();
-        let v8 = Volume::from_vec(g, data).map_err(|e| IoError::invalid(path, e.to_string()))?;
-        write_volume(path, &AnyVolume::U8(v8))
-    } else {
-        write_volume(path, &AnyVolume::U16(v.clone()))
-    }
+    write_volume(path, &narrowest(v))
+}
+
+/// The bytes [`write_labels`] would write to a file named `name`, made in
+/// memory ([`write_volume_bytes`]).
+pub fn write_labels_bytes(name: &str, v: &LabelVolume) -> Result<Vec<u8>, IoError> {
+    write_volume_bytes(name, &narrowest(v))
 }

@@ -332,20 +332,26 @@ fn header_text(v: &AnyVolume, compressed: Option<usize>, data_file: &str) -> Str
     s
 }
 
+/// The bytes of a `.mha` file (zlib data attached) into `w`; `path` names it
+/// in errors.
+pub(crate) fn encode_mha(w: &mut impl Write, path: &Path, v: &AnyVolume) -> Result<(), IoError> {
+    let data = v.to_le_bytes();
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+    z.write_all(&data).map_err(|e| IoError::write(path, e))?;
+    let zdata = z.finish().map_err(|e| IoError::write(path, e))?;
+    drop(data);
+    let head = header_text(v, Some(zdata.len()), "LOCAL");
+    w.write_all(head.as_bytes())
+        .and_then(|()| w.write_all(&zdata))
+        .map_err(|e| IoError::write(path, e))
+}
+
 /// Write a `.mha` (zlib data attached) or `.mhd` (+ uncompressed `.raw`) file.
 pub fn write(path: &Path, v: &AnyVolume, attached: bool) -> Result<(), IoError> {
-    let data = v.to_le_bytes();
     if attached {
-        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
-        z.write_all(&data).map_err(|e| IoError::write(path, e))?;
-        let zdata = z.finish().map_err(|e| IoError::write(path, e))?;
-        drop(data);
-        let head = header_text(v, Some(zdata.len()), "LOCAL");
-        raw::write_atomic(path, |w| {
-            w.write_all(head.as_bytes())?;
-            w.write_all(&zdata)
-        })
+        raw::write_atomic_with(path, |w| encode_mha(w, path, v))
     } else {
+        let data = v.to_le_bytes();
         let raw_path = path.with_extension("raw");
         let raw_name = raw_path
             .file_name()

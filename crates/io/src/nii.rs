@@ -572,6 +572,16 @@ fn header_bytes(g: &Geometry, t: RawType) -> Vec<u8> {
 
 /// Write a `.nii` (or, with `gz`, `.nii.gz`) file atomically.
 pub fn write(path: &Path, v: &AnyVolume, gz: bool) -> Result<(), IoError> {
+    raw::write_atomic_with(path, |w| encode(w, path, v, gz))
+}
+
+/// The bytes of a `.nii` (or `.nii.gz`) file into `w`; `path` names it in errors.
+pub(crate) fn encode(
+    w: &mut impl Write,
+    path: &Path,
+    v: &AnyVolume,
+    gz: bool,
+) -> Result<(), IoError> {
     let g = v.geometry();
     if g.dims.iter().any(|&d| d > i16::MAX as usize) {
         return Err(IoError::unsupported(
@@ -581,7 +591,7 @@ pub fn write(path: &Path, v: &AnyVolume, gz: bool) -> Result<(), IoError> {
     }
     let head = header_bytes(g, RawType::of(v));
     let data = v.to_le_bytes();
-    raw::write_atomic(path, |w| {
+    let write = || -> std::io::Result<()> {
         if gz {
             let mut e = flate2::write::GzEncoder::new(w, flate2::Compression::fast());
             e.write_all(&head)?;
@@ -592,7 +602,8 @@ pub fn write(path: &Path, v: &AnyVolume, gz: bool) -> Result<(), IoError> {
             w.write_all(&data)?;
         }
         Ok(())
-    })
+    };
+    write().map_err(|e| IoError::write(path, e))
 }
 
 #[cfg(test)]

@@ -708,6 +708,17 @@ pub fn write_with_keys(
     v: &AnyVolume,
     keys: &[(String, String)],
 ) -> Result<(), IoError> {
+    raw::write_atomic_with(path, |w| encode(w, path, v, keys))
+}
+
+/// The bytes of a `.nrrd` file with extra `key:=value` lines into `w`;
+/// `path` names it in errors.
+pub(crate) fn encode(
+    w: &mut impl Write,
+    path: &Path,
+    v: &AnyVolume,
+    keys: &[(String, String)],
+) -> Result<(), IoError> {
     let g = v.geometry();
     let t = RawType::of(v);
     let vec3 = |x: [f64; 3]| format!("({},{},{})", num(x[0]), num(x[1]), num(x[2]));
@@ -739,11 +750,12 @@ pub fn write_with_keys(
     }
     head.push('\n');
     let data = v.to_le_bytes();
-    raw::write_atomic(path, |w| {
+    let mut write = || -> std::io::Result<()> {
         w.write_all(head.as_bytes())?;
-        let mut e = flate2::write::GzEncoder::new(w, flate2::Compression::fast());
+        let mut e = flate2::write::GzEncoder::new(&mut *w, flate2::Compression::fast());
         e.write_all(&data)?;
         e.finish()?;
         Ok(())
-    })
+    };
+    write().map_err(|e| IoError::write(path, e))
 }

@@ -282,6 +282,15 @@ pub fn write_atomic(
     path: &Path,
     f: impl FnOnce(&mut BufWriter<&std::fs::File>) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
+    write_atomic_with(path, |w| f(w).map_err(|e| IoError::write(path, e)))
+}
+
+/// [`write_atomic`] for an encoder that reports its own errors (a format's
+/// one-file writer, which checks what it writes before and while writing).
+pub fn write_atomic_with(
+    path: &Path,
+    f: impl FnOnce(&mut BufWriter<&std::fs::File>) -> Result<(), IoError>,
+) -> Result<(), IoError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -297,7 +306,7 @@ pub fn write_atomic(
         .map_err(|e| IoError::write(path, e))?;
     {
         let mut w = BufWriter::with_capacity(1 << 20, tmp.as_file());
-        f(&mut w).map_err(|e| IoError::write(path, e))?;
+        f(&mut w)?;
         w.flush().map_err(|e| IoError::write(path, e))?;
     }
     // A temporary file is created private (0600); give the result the

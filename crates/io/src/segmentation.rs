@@ -8,8 +8,8 @@
 //! Written by hand: no crate writes Slicer's segment keys or ITK-SNAP's label
 //! descriptions; both are a few lines of text.
 use crate::{IoError, nrrd};
+use interslice_core::LabelVolume;
 use interslice_core::components::{Component, Components};
-use interslice_core::{AnyVolume, LabelVolume, Volume};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -61,8 +61,7 @@ pub fn write_segmentation(
     let table = table_for(labels, components);
     if is_seg_nrrd(path) {
         let keys = slicer_keys(labels, &table);
-        let v = narrowest(path, labels)?;
-        nrrd::write_with_keys(path, &v, &keys)?;
+        nrrd::write_with_keys(path, &crate::narrowest(labels), &keys)?;
         return Ok(vec![path.to_path_buf()]);
     }
     crate::write_labels(path, labels)?;
@@ -72,6 +71,23 @@ pub fn write_segmentation(
         w.write_all(itksnap_text(&table).as_bytes())
     })?;
     Ok(vec![path.to_path_buf(), desc])
+}
+
+/// The bytes of a `.seg.nrrd` file named `name` holding `labels` and the
+/// segment table of `components`, made in memory (downloads).
+pub fn seg_nrrd_bytes(
+    name: &str,
+    labels: &LabelVolume,
+    components: &Components,
+) -> Result<Vec<u8>, IoError> {
+    let path = Path::new(name);
+    if !is_seg_nrrd(path) {
+        return Err(IoError::unsupported(path, "not a .seg.nrrd name"));
+    }
+    let keys = slicer_keys(labels, &table_for(labels, components));
+    let mut out = Vec::new();
+    nrrd::encode(&mut out, path, &crate::narrowest(labels), &keys)?;
+    Ok(out)
 }
 
 /// The components a label file declares: the segment table of a `.seg.nrrd`,
@@ -163,18 +179,6 @@ fn table_for(labels: &LabelVolume, components: &Components) -> Vec<Component> {
     }
     table.sort_by_key(|c| c.value);
     table
-}
-
-/// u8 when every value fits (what Slicer and ITK-SNAP write), else u16.
-fn narrowest(path: &Path, labels: &LabelVolume) -> Result<AnyVolume, IoError> {
-    if labels.data().iter().all(|&v| v <= 255) {
-        let data = labels.data().iter().map(|&v| v as u8).collect();
-        Volume::from_vec(labels.geometry().clone(), data)
-            .map(AnyVolume::U8)
-            .map_err(|e| IoError::invalid(path, e.to_string()))
-    } else {
-        Ok(AnyVolume::U16(labels.clone()))
-    }
 }
 
 /// The voxel extent of each value: `[imin, imax, jmin, jmax, kmin, kmax]`,
@@ -310,7 +314,7 @@ fn itksnap_text(table: &[Component]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use interslice_core::{Geometry, LengthUnit};
+    use interslice_core::{Geometry, LengthUnit, Volume};
 
     fn labels() -> LabelVolume {
         let g = Geometry::new([4, 3, 2], [0.5, 0.5, 2.0], LengthUnit::Millimetre).unwrap();
@@ -344,6 +348,10 @@ mod tests {
         assert_eq!(keys["Segment0_Extent"], "1 2 1 1 0 0");
         assert_eq!(keys["Segment1_Extent"], "0 -1 0 -1 0 -1");
         assert_eq!(keys["Segment2_ID"], "Segment_7");
+        // The download's bytes are the file's.
+        let bytes = seg_nrrd_bytes("out.seg.nrrd", &labels(), &comps).unwrap();
+        assert_eq!(bytes, std::fs::read(&p).unwrap());
+        assert!(seg_nrrd_bytes("out.nrrd", &labels(), &comps).is_err());
     }
 
     #[test]

@@ -451,6 +451,16 @@ fn write_pages<W: std::io::Write + std::io::Seek, K: TiffKind>(
 
 /// Write a volume as a multi-page TIFF with ImageJ metadata, atomically.
 pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
+    raw::write_atomic_with(path, |w| encode(w, path, v))
+}
+
+/// The bytes of a multi-page TIFF into `w` (TIFF needs to seek back to its
+/// directories); `path` names it in errors.
+pub(crate) fn encode(
+    w: &mut (impl std::io::Write + std::io::Seek),
+    path: &Path,
+    v: &AnyVolume,
+) -> Result<(), IoError> {
     let g = v.geometry();
     let [nx, ny, _] = g.dims;
     if nx > u32::MAX as usize || ny > u32::MAX as usize {
@@ -465,7 +475,7 @@ pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
         TiffError::IoError(e) => e,
         other => std::io::Error::other(other.to_string()),
     };
-    raw::write_atomic(path, |w| {
+    let mut write = || -> std::io::Result<()> {
         // Classic TIFF offsets are 32-bit; leave room for the directories.
         if bytes > (1 << 32) - (1 << 24) {
             write_pages(&mut TiffEncoder::new_big(&mut *w).map_err(to_io)?, v, &desc)
@@ -473,5 +483,6 @@ pub fn write(path: &Path, v: &AnyVolume) -> Result<(), IoError> {
             write_pages(&mut TiffEncoder::new(&mut *w).map_err(to_io)?, v, &desc)
         }
         .map_err(to_io)
-    })
+    };
+    write().map_err(|e| IoError::write(path, e))
 }

@@ -99,23 +99,23 @@ pub fn volume_extension(format: &str) -> Result<&str, ProjectError> {
     }
 }
 
-/// The bytes of `labels` written as the file `name` (the writers take paths,
-/// so through a private temporary folder). A `.seg.nrrd` carries the
-/// project's components as its segment table.
+/// The bytes of `labels` as the file `name`, made in memory. A `.seg.nrrd`
+/// carries the project's components as its segment table.
 pub fn label_file_bytes(
     store: &Store,
     labels: &LabelVolume,
     name: &str,
 ) -> Result<Vec<u8>, ProjectError> {
-    let dir = tempfile::tempdir().map_err(|e| ProjectError::internal(e.to_string()))?;
-    let path = dir.path().join(name);
-    if interslice_io::segmentation::is_seg_nrrd(&path) {
+    if interslice_io::segmentation::is_seg_nrrd(std::path::Path::new(name)) {
         let components = store.components()?;
-        interslice_io::segmentation::write_segmentation(&path, labels, &components)?;
+        Ok(interslice_io::segmentation::seg_nrrd_bytes(
+            name,
+            labels,
+            &components,
+        )?)
     } else {
-        interslice_io::write_labels(&path, labels)?;
+        Ok(interslice_io::write_labels_bytes(name, labels)?)
     }
-    std::fs::read(&path).map_err(|e| ProjectError::internal(e.to_string()))
 }
 
 /// The user's contours of a cell in the contours file format.
