@@ -5,6 +5,7 @@
 mod cmd;
 mod label;
 mod progress;
+mod project;
 mod series;
 
 use clap::{Parser, Subcommand};

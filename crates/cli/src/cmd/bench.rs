@@ -243,7 +243,6 @@ fn mean(rows: &[Row], f: impl Fn(&Row) -> bool, v: impl Fn(&Row) -> f64) -> Opti
 }
 
 fn print_table(rows: &[Row], a: &Args) {
-    let cell = |x: Option<f64>| x.map_or("   -  ".to_string(), |v| format!("{v:.4}"));
     let ks: Vec<String> = a.skips.iter().map(|k| format!("k={k:<4}")).collect();
     println!(
         "| family (masks) | method | {} | whole k={} | s/run |",
@@ -253,7 +252,6 @@ fn print_table(rows: &[Row], a: &Args) {
     println!("|---|---|{}---|---|", "---|".repeat(a.skips.len()));
     let mut families: Vec<&str> = rows.iter().map(|r| r.family).collect();
     families.dedup();
-    let whole_k = a.skips[a.skips.len() / 2];
     for fam in families {
         let mut masks: Vec<&str> = rows
             .iter()
@@ -263,51 +261,43 @@ fn print_table(rows: &[Row], a: &Args) {
         masks.dedup();
         for m in &a.methods {
             let sel = |r: &Row| r.family == fam && &r.method == m;
-            if !rows.iter().any(sel) {
-                continue;
+            if let Some(cells) = dice_cells(rows, a, sel) {
+                let secs = mean(rows, sel, |r| r.seconds).unwrap_or(0.0);
+                println!("| {fam} ({}) | {m} | {cells} | {secs:.3} |", masks.len());
             }
-            let per_k: Vec<String> = a
-                .skips
-                .iter()
-                .map(|&k| cell(mean(rows, |r| sel(r) && r.skip == k, |r| r.dice_skipped)))
-                .collect();
-            println!(
-                "| {fam} ({}) | {m} | {} | {} | {:.3} |",
-                masks.len(),
-                per_k.join(" | "),
-                cell(mean(
-                    rows,
-                    |r| sel(r) && r.skip == whole_k,
-                    |r| r.dice_whole
-                )),
-                mean(rows, sel, |r| r.seconds).unwrap_or(0.0)
-            );
         }
         if a.per_mask {
             for mask in &masks {
                 for m in &a.methods {
                     let sel = |r: &Row| r.mask == *mask && &r.method == m;
-                    if !rows.iter().any(sel) {
-                        continue;
+                    if let Some(cells) = dice_cells(rows, a, sel) {
+                        println!("|   {mask} | {m} | {cells} | |");
                     }
-                    let per_k: Vec<String> = a
-                        .skips
-                        .iter()
-                        .map(|&k| cell(mean(rows, |r| sel(r) && r.skip == k, |r| r.dice_skipped)))
-                        .collect();
-                    println!(
-                        "|   {mask} | {m} | {} | {} | |",
-                        per_k.join(" | "),
-                        cell(mean(
-                            rows,
-                            |r| sel(r) && r.skip == whole_k,
-                            |r| r.dice_whole
-                        ))
-                    );
                 }
             }
         }
     }
+}
+
+/// The Dice cells of a table row: the skipped slices' mean Dice at each k,
+/// then the whole volume's at the middle k; None when no row is selected.
+fn dice_cells(rows: &[Row], a: &Args, sel: impl Fn(&Row) -> bool) -> Option<String> {
+    if !rows.iter().any(&sel) {
+        return None;
+    }
+    let cell = |x: Option<f64>| x.map_or("   -  ".to_string(), |v| format!("{v:.4}"));
+    let whole_k = a.skips[a.skips.len() / 2];
+    let mut cells: Vec<String> = a
+        .skips
+        .iter()
+        .map(|&k| cell(mean(rows, |r| sel(r) && r.skip == k, |r| r.dice_skipped)))
+        .collect();
+    cells.push(cell(mean(
+        rows,
+        |r| sel(r) && r.skip == whole_k,
+        |r| r.dice_whole,
+    )));
+    Some(cells.join(" | "))
 }
 
 /// Time the methods (k = 5) on phantom cells of the two sizes of the speed targets.

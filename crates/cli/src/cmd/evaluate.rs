@@ -27,9 +27,6 @@ pub struct Args {
     /// Evaluate only the voxels equal to N (for 0/1 masks, N = 1). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
-    /// `--label` resolved to its value (set by `run`).
-    #[arg(skip)]
-    pub label: Option<u16>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -65,8 +62,8 @@ fn check_geometry(gt: &LabelVolume, seg: &LabelVolume) -> Result<()> {
 }
 
 /// Run the command.
-pub fn run(mut a: Args) -> Result<()> {
-    a.label = a
+pub fn run(a: Args) -> Result<()> {
+    let label = a
         .label_arg
         .as_ref()
         .map(|l| l.resolve(&[&a.ground_truth, &a.segmentation]))
@@ -88,7 +85,7 @@ pub fn run(mut a: Args) -> Result<()> {
     let (gt, seg) = (gt?, seg?);
     check_geometry(&gt, &seg)?;
 
-    if let Some(label) = a.label {
+    if let Some(label) = label {
         let m = evaluate_label(&gt, &seg, label, a.tolerance)?;
         spin.finish_and_clear();
         if m.tp + m.fp + m.fn_ == 0 {

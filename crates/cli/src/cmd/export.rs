@@ -12,8 +12,8 @@ use std::path::PathBuf;
 /// Arguments of `export`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The project folder.
-    pub dir: PathBuf,
+    #[command(flatten)]
+    pub project: crate::project::ProjectArgs,
     /// The cell id (its file name without extension, as the server lists it).
     #[arg(long)]
     pub cell: String,
@@ -23,15 +23,9 @@ pub struct Args {
     /// Only this label (default: every label the user traced). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
-    /// `--label` resolved to its value (set by `run`).
-    #[arg(skip)]
-    pub label: Option<u16>,
     /// Interpolation method (`interslice interpolate --list`; default the best).
     #[arg(long)]
     pub method: Option<String>,
-    /// The annotation database (default DIR/.interslice/annotations.sqlite).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
     /// Output file: a label volume (.nii.gz, .nii, .nrrd, .mha, .tif; an ITK-SNAP
     /// label description NAME.label.txt is written beside it), a 3D Slicer
     /// segmentation (.seg.nrrd, with segment names and colours) or `.contours.json`.
@@ -40,16 +34,11 @@ pub struct Args {
 }
 
 /// Run the command.
-pub fn run(mut a: Args) -> Result<()> {
-    let store = interslice_project::open_store(&a.dir, a.db.as_deref(), None)?;
-    let cells = interslice_project::register_cells(&store, &a.dir, &Default::default())
+pub fn run(a: Args) -> Result<()> {
+    let store = a.project.open()?;
+    let cells = interslice_project::register_cells(&store, &a.project.dir, &Default::default())
         .context("cannot list the project folder")?;
-    let components = store.components()?;
-    a.label = a
-        .label_arg
-        .as_ref()
-        .map(|l| l.resolve_in(&components))
-        .transpose()?;
+    let label = crate::project::resolve_label(&store, a.label_arg.as_ref())?;
     let path = interslice_project::cell_path(&cells, &a.cell)?;
     let user = store
         .user(&a.user)?
@@ -72,7 +61,7 @@ pub fn run(mut a: Args) -> Result<()> {
             &a.cell,
             user.id,
             method.as_ref(),
-            a.label,
+            label,
             &interslice_core::Cancel::new(),
         )?;
         if labels.data().iter().all(|&v| v == 0) {
@@ -80,8 +69,9 @@ pub fn run(mut a: Args) -> Result<()> {
         }
         // A .seg.nrrd carries the component table; any other label volume
         // gets an ITK-SNAP label description file beside it.
-        let written = interslice_io::segmentation::write_segmentation(&a.out, &labels, &components)
-            .with_context(|| format!("writing {}", a.out.display()))?;
+        let written =
+            interslice_io::segmentation::write_segmentation(&a.out, &labels, &store.components()?)
+                .with_context(|| format!("writing {}", a.out.display()))?;
         for f in written.iter().skip(1) {
             eprintln!("wrote {}", f.display());
         }

@@ -36,9 +36,6 @@ pub struct Args {
     /// Only this label (default: every non-zero voxel; with --method every label on its own). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
-    /// `--label` resolved to its value (set by `run`).
-    #[arg(skip)]
-    pub label: Option<u16>,
     /// Mesh this method's interpolation of the sparse input (see `interpolate --list`).
     #[arg(long)]
     pub method: Option<String>,
@@ -54,8 +51,8 @@ pub struct Args {
 }
 
 /// Run `mesh`.
-pub fn run(mut a: Args) -> Result<()> {
-    a.label = a
+pub fn run(a: Args) -> Result<()> {
+    let label = a
         .label_arg
         .as_ref()
         .map(|l| l.resolve(&[&a.labels]))
@@ -75,8 +72,8 @@ pub fn run(mut a: Args) -> Result<()> {
         .to_labels()
         .with_context(|| format!("{} is not a label volume", a.labels.display()))?;
     let mut mesh = match &a.method {
-        None => volume_surface(&labels, a.label, &a)?,
-        Some(name) => method_surface(&labels, name, &a)?,
+        None => volume_surface(&labels, label, &a)?,
+        Some(name) => method_surface(&labels, name, label, &a)?,
     };
     let (m, t) = world_transform(labels.geometry());
     mesh.transform(m, t);
@@ -108,7 +105,12 @@ fn volume_surface(labels: &LabelVolume, label: Option<u16>, a: &Args) -> Result<
 }
 
 /// The mesh of method `name` for every label on the drawn slices (or `--label`).
-fn method_surface(labels: &LabelVolume, name: &str, a: &Args) -> Result<TriMesh> {
+fn method_surface(
+    labels: &LabelVolume,
+    name: &str,
+    label: Option<u16>,
+    a: &Args,
+) -> Result<TriMesh> {
     let method = by_name(name)?;
     let drawn = super::interpolate::drawn_slices(labels, a.axis, a.drawn.as_deref())?;
     let mut present = vec![false; 65536];
@@ -117,7 +119,7 @@ fn method_surface(labels: &LabelVolume, name: &str, a: &Args) -> Result<TriMesh>
             present[usize::from(v)] = true;
         }
     }
-    let wanted: Vec<u16> = match a.label {
+    let wanted: Vec<u16> = match label {
         Some(l) if present[usize::from(l)] && l != 0 => vec![l],
         Some(l) => bail!(
             "label {l} does not occur on the drawn slices along {}",

@@ -2,19 +2,15 @@
 //! tracing server and its web UI over a project folder.
 use anyhow::Result;
 use std::net::SocketAddr;
-use std::path::PathBuf;
 
 /// Arguments of `serve`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// The project folder: volume files and folders of slices, one cell each.
-    pub dir: PathBuf,
+    #[command(flatten)]
+    pub project: crate::project::ProjectArgs,
     /// Address to listen on. Off loopback, accounts with passwords are required.
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub bind: SocketAddr,
-    /// The annotation database (default DIR/.interslice/annotations.sqlite).
-    #[arg(long)]
-    pub db: Option<PathBuf>,
     /// Require accounts with passwords even on loopback.
     #[arg(long)]
     pub require_login: bool,
@@ -39,9 +35,9 @@ fn parse_components(s: &str) -> Result<interslice_core::components::Components, 
 impl Args {
     /// The server configuration these arguments describe.
     pub fn config(&self) -> interslice_server::Config {
-        let mut c = interslice_server::Config::new(&self.dir);
+        let mut c = interslice_server::Config::new(&self.project.dir);
         c.bind = self.bind;
-        c.db = self.db.clone();
+        c.db = self.project.db.clone();
         c.require_login = self.require_login;
         c.body_limit = self.body_limit_mib << 20;
         c.components = self.components.clone();

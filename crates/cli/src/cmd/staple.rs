@@ -26,9 +26,6 @@ pub struct Args {
     /// Only this label (voxels equal to L are foreground). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
-    /// `--label` resolved to its value (set by `run`).
-    #[arg(skip)]
-    pub label: Option<u16>,
     /// With --label: write the posterior probability of every voxel (f32).
     #[arg(long, value_name = "FILE")]
     pub probability: Option<PathBuf>,
@@ -68,8 +65,8 @@ fn finite(x: f64) -> Option<f64> {
 }
 
 /// Run the command.
-pub fn run(mut a: Args) -> Result<()> {
-    a.label = a
+pub fn run(a: Args) -> Result<()> {
+    let label = a
         .label_arg
         .as_ref()
         .map(|l| l.resolve(&a.raters.iter().map(|p| p.as_path()).collect::<Vec<_>>()))
@@ -80,7 +77,7 @@ pub fn run(mut a: Args) -> Result<()> {
             a.raters.len()
         );
     }
-    if a.probability.is_some() && a.label.is_none() {
+    if a.probability.is_some() && label.is_none() {
         bail!("--probability needs --label (one binary run)");
     }
     let vols: Vec<LabelVolume> = a
@@ -100,7 +97,7 @@ pub fn run(mut a: Args) -> Result<()> {
         ..Default::default()
     };
     let mut runs = Vec::new();
-    if let Some(l) = a.label {
+    if let Some(l) = label {
         let masks: Vec<Mask> = vols.iter().map(|v| v.mask_of(l)).collect();
         let refs: Vec<&Mask> = masks.iter().collect();
         let s = staple(&refs, params, &interslice_core::Cancel::new())?;

@@ -40,9 +40,6 @@ pub struct Args {
     /// Study only this label (default: every label of the ground truth). A number or a component's name.
     #[arg(long = "label", value_name = "L")]
     pub label_arg: Option<crate::label::LabelArg>,
-    /// `--label` resolved to its value (set by `run`).
-    #[arg(skip)]
-    pub label: Option<u16>,
     /// Instead of dropping slices: simulate a tracer who traces the outermost
     /// slices and then `--budget` more chosen by these strategies
     /// (`uniform`, `advised`), and compare the Dice (strategy.csv, strategy.md).
@@ -61,8 +58,8 @@ pub struct Args {
 }
 
 /// Run `study`.
-pub fn run(mut a: Args) -> Result<()> {
-    a.label = a
+pub fn run(a: Args) -> Result<()> {
+    let label = a
         .label_arg
         .as_ref()
         .map(|l| l.resolve(&[&a.ground_truth]))
@@ -96,7 +93,7 @@ pub fn run(mut a: Args) -> Result<()> {
         .map(|&(l, _)| l)
         .filter(|&l| l != 0)
         .collect();
-    let labels = match a.label {
+    let labels = match label {
         Some(l) if present.contains(&l) => vec![l],
         Some(l) => bail!("label {l} is not in {}", a.ground_truth.display()),
         None if present.is_empty() => bail!("{} has no labels", a.ground_truth.display()),
@@ -149,7 +146,7 @@ pub fn run(mut a: Args) -> Result<()> {
     let names: Vec<&str> = chosen.iter().map(|m| m.name()).collect();
     let ctx = StudyReport {
         source: &a.ground_truth,
-        provenance: provenance(&a),
+        provenance: provenance(&a, label),
         gt: &gt,
         axis: a.axis,
         labels: &labels,
@@ -197,7 +194,7 @@ pub fn parse_skips(s: &str) -> Result<Vec<usize>> {
 }
 
 /// The provenance of a study run with `a`.
-fn provenance(a: &Args) -> Provenance {
+fn provenance(a: &Args, label: Option<u16>) -> Provenance {
     let gt = &a.ground_truth;
     let name = gt
         .file_name()
@@ -226,7 +223,7 @@ fn provenance(a: &Args) -> Provenance {
     if let Some(p) = &a.image {
         let _ = write!(study, " --image {}", p.display());
     }
-    if let Some(l) = a.label {
+    if let Some(l) = label {
         let _ = write!(study, " --label {l}");
     }
     if a.tolerance != interslice_core::metrics::DEFAULT_TOLERANCE {

@@ -5,7 +5,7 @@
 //! The password is read from the `INTERSLICE_PASSWORD` environment variable or
 //! from the first line of standard input, never from the command line (which
 //! other users can see in the process list).
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use interslice_store::{Role, Store};
 use std::io::BufRead as _;
 use std::path::PathBuf;
@@ -45,11 +45,7 @@ enum Action {
 }
 
 fn open(dir: &std::path::Path, db: Option<PathBuf>) -> Result<Store> {
-    if !dir.is_dir() {
-        bail!("{} is not a folder", dir.display());
-    }
-    let db = db.unwrap_or_else(|| interslice_store::default_db_path(dir));
-    Store::open(&db).with_context(|| format!("cannot open {}", db.display()))
+    Ok(interslice_project::open_store(dir, db.as_deref(), None)?)
 }
 
 fn read_password() -> Result<String> {
