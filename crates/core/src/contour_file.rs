@@ -658,8 +658,8 @@ mod tests {
         }
     }
 
-    #[test]
-    fn write_rejects_what_read_would_reject() {
+    /// A 4³ µm grid with one contour of label 1 on slice z = 0.
+    fn one_contour_file(points: Vec<[f64; 2]>) -> ContourFile {
         let mut f =
             ContourFile::new(Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap());
         f.contours.push(Contour::new(
@@ -668,10 +668,16 @@ mod tests {
                 index: 0,
             },
             1,
-            vec![[f64::NAN, 0.0]],
+            points,
             "a",
             "t",
         ));
+        f
+    }
+
+    #[test]
+    fn write_rejects_what_read_would_reject() {
+        let mut f = one_contour_file(vec![[f64::NAN, 0.0]]);
         assert!(write(&f).unwrap_err().to_string().contains("not finite"));
         f.contours[0].points = vec![[0.0, 0.0]];
         f.contours[0].label = 42;
@@ -697,18 +703,7 @@ mod tests {
         );
         assert!(err(&g).contains("contours file"), "{}", err(&g));
         // Too many points in one contour.
-        let mut f =
-            ContourFile::new(Geometry::new([4, 4, 4], [1.0; 3], LengthUnit::Micrometre).unwrap());
-        f.contours.push(Contour::new(
-            SliceRef {
-                axis: Axis::Z,
-                index: 0,
-            },
-            1,
-            vec![[1.0, 1.0]; MAX_POINTS_PER_CONTOUR + 1],
-            "a",
-            "t",
-        ));
+        let f = one_contour_file(vec![[1.0, 1.0]; MAX_POINTS_PER_CONTOUR + 1]);
         let e = f.validate().unwrap_err().to_string();
         assert!(e.contains("points (at most"), "{e}");
         // A text longer than the bound is refused before it is parsed.

@@ -135,6 +135,22 @@ const MAX_LAYERS: usize = 256;
 /// attached header (or the end of a detached one).
 type HeaderFields = (HashMap<String, String>, HashMap<String, String>);
 
+/// The magic line, then the fields and keys of the header.
+fn read_header<R: BufRead + ?Sized>(
+    path: &Path,
+    r: &mut R,
+    consumed: &mut usize,
+) -> Result<HeaderFields, IoError> {
+    let first = header::read_line(path, r, consumed)?.unwrap_or_default();
+    if !first.starts_with("NRRD000") {
+        return Err(IoError::invalid(
+            path,
+            "not a NRRD file (no NRRD000x magic line)",
+        ));
+    }
+    read_fields(path, r, consumed)
+}
+
 fn read_fields<R: BufRead + ?Sized>(
     path: &Path,
     r: &mut R,
@@ -171,14 +187,7 @@ fn read_fields<R: BufRead + ?Sized>(
 pub fn read_keys(path: &Path) -> Result<HashMap<String, String>, IoError> {
     let (mut r, _) = Source::file(path).open()?;
     let mut consumed = 0usize;
-    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
-    if !first.starts_with("NRRD000") {
-        return Err(IoError::invalid(
-            path,
-            "not a NRRD file (no NRRD000x magic line)",
-        ));
-    }
-    Ok(read_fields(path, &mut r, &mut consumed)?.1)
+    Ok(read_header(path, &mut r, &mut consumed)?.1)
 }
 
 /// Read a NRRD file or bytes; a detached data file must be inside the
@@ -187,14 +196,7 @@ pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<L
     let path = src.name;
     let (mut r, total_len) = src.open()?;
     let mut consumed = 0usize;
-    let first = header::read_line(path, &mut r, &mut consumed)?.unwrap_or_default();
-    if !first.starts_with("NRRD000") {
-        return Err(IoError::invalid(
-            path,
-            "not a NRRD file (no NRRD000x magic line)",
-        ));
-    }
-    let (fields, keys) = read_fields(path, &mut r, &mut consumed)?;
+    let (fields, keys) = read_header(path, &mut r, &mut consumed)?;
     let get = |k: &str| fields.get(k).map(String::as_str);
     let need = |k: &str| {
         get(k).ok_or_else(|| IoError::invalid(path, format!("NRRD header has no '{k}' field")))
@@ -334,20 +336,16 @@ pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<L
     } else {
         // No space: per-axis spacings (NaN for non-spatial axes).
         let mut axes = [[0.0; 3]; 3];
-        let sp: Vec<f64> = get("spacings")
-            .map(|s| {
+        // A per-axis number list; a missing or unreadable entry is NaN.
+        let numbers = |key: &str| -> Vec<f64> {
+            get(key).map_or_else(Vec::new, |s| {
                 s.split_whitespace()
                     .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
                     .collect()
             })
-            .unwrap_or_default();
-        let mins: Vec<f64> = get("axis mins")
-            .map(|s| {
-                s.split_whitespace()
-                    .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
-                    .collect()
-            })
-            .unwrap_or_default();
+        };
+        let sp = numbers("spacings");
+        let mins = numbers("axis mins");
         let mut origin = [0.0; 3];
         for a in 0..3 {
             // An axis the file has must have a positive spacing when
@@ -378,29 +376,22 @@ pub(crate) fn read(src: Source<'_>, limits: &ReadLimits, want: Want) -> Result<L
         header::geometry_from_axes(path, dims, axes, origin, unit)?
     };
 
-    let encoding = need("encoding")?.to_ascii_lowercase();
-    let encoding = match encoding.as_str() {
-        "raw" => Encoding::Raw,
-        "gzip" | "gz" => Encoding::Gzip,
-        "ascii" | "text" | "txt" => Encoding::Ascii,
-        other => {
-            return Err(IoError::unsupported(
-                path,
-                format!("NRRD encoding '{other}' is not supported (use raw, gzip or ascii)"),
-            ));
-        }
-    };
+    let encoding_name = need("encoding")?.to_ascii_lowercase();
+    let encoding = Encoding::parse(&encoding_name).ok_or_else(|| {
+        IoError::unsupported(
+            path,
+            format!("NRRD encoding '{encoding_name}' is not supported (use raw, gzip or ascii)"),
+        )
+    })?;
     let byte_skip: i64 = match get("byte skip") {
         None => 0,
         Some(s) => match s.trim().parse::<i64>() {
             Ok(-1) if encoding == Encoding::Raw => -1,
             Ok(n) if n >= 0 => n,
-            _ => {
-                return Err(IoError::invalid(
-                    path,
-                    format!("bad NRRD 'byte skip' '{s}' (a count of bytes, or -1 for raw data)"),
-                ));
-            }
+            _ => Err(IoError::invalid(
+                path,
+                format!("bad NRRD 'byte skip' '{s}' (a count of bytes, or -1 for raw data)"),
+            ))?,
         },
     };
     let line_skip: usize = match get("line skip") {
@@ -531,6 +522,18 @@ enum Encoding {
     Raw,
     Gzip,
     Ascii,
+}
+
+impl Encoding {
+    /// The encoding of a (lower-case) `encoding:` field, if supported.
+    fn parse(name: &str) -> Option<Encoding> {
+        match name {
+            "raw" => Some(Encoding::Raw),
+            "gzip" | "gz" => Some(Encoding::Gzip),
+            "ascii" | "text" | "txt" => Some(Encoding::Ascii),
+            _ => None,
+        }
+    }
 }
 
 /// One segment of a 3D Slicer segmentation: the layer it lives in and its

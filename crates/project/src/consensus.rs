@@ -116,30 +116,8 @@ pub fn consensus_of(
     Ok(Consensus { labels, per_label })
 }
 
-/// The consensus of a cell from the store (see [`rater_masks`]); not found when no
-/// label was traced by two users.
-pub fn consensus(
-    store: &Store,
-    geometry: &Geometry,
-    cell: &str,
-    method: &dyn Interpolator,
-    only_label: Option<u16>,
-    cancel: &Cancel,
-) -> Result<Consensus, ProjectError> {
-    let raters = rater_masks(store, geometry, cell, method, only_label, cancel)?;
-    let c = consensus_of(geometry, &raters, StapleParams::default(), cancel)?;
-    if c.per_label.is_empty() {
-        return Err(ProjectError::not_found(format!(
-            "no label of cell '{cell}' was traced by two users{}",
-            only_label
-                .map(|l| format!(" (label {l})"))
-                .unwrap_or_default()
-        )));
-    }
-    Ok(c)
-}
-
-/// The consensus label volume of a cell for `user=consensus` exports. It
+/// The consensus label volume of a cell for `user=consensus` exports (see
+/// [`rater_masks`]); not found when no label was traced by two users. It
 /// combines everyone's tracings, so only reviewers may read it.
 pub fn consensus_for(
     store: &Store,
@@ -155,7 +133,17 @@ pub fn consensus_for(
             "only reviewers may read the consensus of everyone's tracings",
         ));
     }
-    Ok(consensus(store, geometry, cell, method, only_label, cancel)?.labels)
+    let raters = rater_masks(store, geometry, cell, method, only_label, cancel)?;
+    let c = consensus_of(geometry, &raters, StapleParams::default(), cancel)?;
+    if c.per_label.is_empty() {
+        return Err(ProjectError::not_found(format!(
+            "no label of cell '{cell}' was traced by two users{}",
+            only_label
+                .map(|l| format!(" (label {l})"))
+                .unwrap_or_default()
+        )));
+    }
+    Ok(c.labels)
 }
 
 /// The file of a `user=consensus` export: the consensus label volume in
