@@ -506,16 +506,11 @@ export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
         /** @description Body of `POST /api/cells/{cell}/contours`. */
-        AddContour: {
+        AddContour: components["schemas"]["NewContour"] & {
             /** @description "x", "y" or "z". */
             axis: string;
             /** @description Idempotency key: a retry with the same key returns the stored contour. */
             client_id?: string | null;
-            /**
-             * Format: double
-             * @description Time spent drawing it in ms (default: the last of `times_ms`).
-             */
-            duration_ms?: number | null;
             /** @description Slice index. */
             index: number;
             /**
@@ -523,14 +518,6 @@ export interface components {
              * @description Label id.
              */
             label: number;
-            /** @description `[[u, v], ...]`, at least 3. */
-            points: number[][];
-            /** @description Pen pressure per point. */
-            pressure?: number[] | null;
-            /** @description Milliseconds since the stroke began, per point. */
-            times_ms?: number[] | null;
-            /** @description "pen", "mouse", ... */
-            tool?: string | null;
         };
         /** @description A cell in the list. */
         CellSummary: {
@@ -653,6 +640,23 @@ export interface components {
             /** @description `--method` name. */
             name: string;
         };
+        /** @description A contour as the client sends it (no id, author or time stamps yet). */
+        NewContour: {
+            /**
+             * Format: double
+             * @description Time spent drawing it, measured by the client (default: the last
+             *     per-point time, if any).
+             */
+            duration_ms?: number | null;
+            /** @description Closed polyline of `(u, v)` points, at least 3, finite. */
+            points: number[][];
+            /** @description Pen pressure per point (same length as `points`). */
+            pressure?: number[] | null;
+            /** @description Milliseconds since the stroke began, per point (same length as `points`). */
+            times_ms?: number[] | null;
+            /** @description The drawing tool ("pen", "mouse", "polygon", ...). */
+            tool?: string | null;
+        };
         /** @description Body of `POST /api/labels`. */
         NewLabel: {
             /** @description `#rrggbb` (a palette colour if omitted). */
@@ -684,7 +688,7 @@ export interface components {
         /** @description Body of `PUT .../slices/{axis}/{index}/contours`. */
         ReplaceSlice: {
             /** @description The new contours of the label on the slice (empty = clear). */
-            contours: Record<string, never>[];
+            contours: components["schemas"]["NewContour"][];
             /**
              * Format: int32
              * @description Label id.

@@ -105,7 +105,7 @@ impl CellStatus {
 }
 
 /// A contour as the client sends it (no id, author or time stamps yet).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct NewContour {
     /// Closed polyline of `(u, v)` points, at least 3, finite.
     pub points: Vec<[f64; 2]>,

@@ -49,20 +49,9 @@ pub struct AddContour {
     pub axis: String,
     /// Slice index.
     pub index: usize,
-    /// `[[u, v], ...]`, at least 3.
-    pub points: Vec<[f64; 2]>,
-    /// Pen pressure per point.
-    #[serde(default)]
-    pub pressure: Option<Vec<f32>>,
-    /// Milliseconds since the stroke began, per point.
-    #[serde(default)]
-    pub times_ms: Option<Vec<f64>>,
-    /// "pen", "mouse", ...
-    #[serde(default)]
-    pub tool: Option<String>,
-    /// Time spent drawing it in ms (default: the last of `times_ms`).
-    #[serde(default)]
-    pub duration_ms: Option<f64>,
+    /// The contour itself.
+    #[serde(flatten)]
+    pub contour: NewContour,
     /// Idempotency key: a retry with the same key returns the stored contour.
     #[serde(default)]
     pub client_id: Option<String>,
@@ -99,13 +88,7 @@ pub(super) async fn add_contour(
     };
     let (stored, created) = state.store.add_contour(
         &key,
-        NewContour {
-            points: body.points,
-            pressure: body.pressure,
-            times_ms: body.times_ms,
-            tool: body.tool,
-            duration_ms: body.duration_ms,
-        },
+        body.contour,
         body.client_id,
     )?;
     let status = if created {
@@ -122,7 +105,6 @@ pub struct ReplaceSlice {
     /// Label id.
     pub label: u16,
     /// The new contours of the label on the slice (empty = clear).
-    #[schema(value_type = Vec<Object>)]
     pub contours: Vec<NewContour>,
 }
 
