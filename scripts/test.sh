@@ -13,6 +13,8 @@ scripts/build-web.sh
 export WEB_BUILT=1
 echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
+echo "== cargo doc"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
 echo "== cargo test"
 cargo test --workspace --no-fail-fast
 for t in scripts/test-*.sh; do

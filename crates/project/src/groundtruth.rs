@@ -10,7 +10,7 @@
 //! slice drawn for the nucleus says nothing about the cell outline there.
 use crate::error::ProjectError;
 use interslice_core::contour_file::ContourFile;
-use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, SliceRef, Volume};
+use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, Volume};
 use interslice_interp::{Interpolator, SparseMask};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
@@ -18,22 +18,7 @@ use std::sync::{Arc, Mutex};
 
 /// Stored contours as core contours.
 pub fn to_core(stored: &[StoredContour]) -> Vec<Contour> {
-    stored
-        .iter()
-        .map(|c| Contour {
-            slice: SliceRef {
-                axis: c.axis,
-                index: c.index,
-            },
-            label: c.label,
-            points: c.points.clone(),
-            author: c.author.clone(),
-            created: c.created.clone(),
-            pressure: c.pressure.clone(),
-            times_ms: c.times_ms.clone(),
-            tool: Some(c.tool.clone()),
-        })
-        .collect()
+    stored.iter().map(|c| c.contour.clone()).collect()
 }
 
 /// What one user traced on one cell, wherever it is kept.

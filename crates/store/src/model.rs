@@ -1,5 +1,5 @@
 //! The records the database stores and returns.
-use interslice_core::Axis;
+use interslice_core::{Axis, Contour};
 use serde::{Deserialize, Serialize};
 
 /// What a user may do: tracers read and write their own tracings, reviewers
@@ -124,45 +124,67 @@ pub struct NewContour {
     pub duration_ms: Option<f64>,
 }
 
-/// A stored contour.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// A stored contour: the contour as traced (its slice, label, points,
+/// author, creation time, pressure, timing and tool, which is always set
+/// here) and what the database keeps beside it.
+#[derive(Debug, Clone, PartialEq)]
 pub struct StoredContour {
     /// Database id.
     pub id: i64,
     /// Cell id.
     pub cell: String,
-    /// Label id.
-    pub label: u16,
-    /// Slice axis.
-    pub axis: Axis,
-    /// Slice index.
-    pub index: usize,
-    /// Closed polyline of `(u, v)` points.
-    pub points: Vec<[f64; 2]>,
-    /// Pen pressure per point, if recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pressure: Option<Vec<f32>>,
-    /// Milliseconds since the stroke began, per point, if recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub times_ms: Option<Vec<f64>>,
+    /// The contour.
+    pub contour: Contour,
     /// Time spent drawing it (the last per-point time), if recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duration_ms: Option<f64>,
-    /// The drawing tool.
-    pub tool: String,
-    /// The author's user name.
-    pub author: String,
     /// The author's user id.
-    #[serde(skip)]
     pub user_id: i64,
     /// The client's idempotency key, if given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub client_id: Option<String>,
-    /// When it was first stored (RFC 3339).
-    pub created: String,
     /// When it last changed (RFC 3339).
     pub updated: String,
 }
+
+/// The API's (and the change log's) flat form: `{"id", "cell", "label",
+/// "axis", "index", "points", "pressure"?, "times_ms"?, "duration_ms"?,
+/// "tool", "author", "client_id"?, "created", "updated"}`. The web client and
+/// stored history read this shape, so it is written out here rather than
+/// derived from the nested [`Contour`].
+impl Serialize for StoredContour {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        fn optional<M: SerializeStruct, T: Serialize>(
+            m: &mut M,
+            key: &'static str,
+            v: &Option<T>,
+        ) -> Result<(), M::Error> {
+            match v {
+                Some(v) => m.serialize_field(key, v),
+                None => m.skip_field(key),
+            }
+        }
+        let c = &self.contour;
+        let mut m = s.serialize_struct("StoredContour", 14)?;
+        m.serialize_field("id", &self.id)?;
+        m.serialize_field("cell", &self.cell)?;
+        m.serialize_field("label", &c.label)?;
+        m.serialize_field("axis", &c.slice.axis)?;
+        m.serialize_field("index", &c.slice.index)?;
+        m.serialize_field("points", &c.points)?;
+        optional(&mut m, "pressure", &c.pressure)?;
+        optional(&mut m, "times_ms", &c.times_ms)?;
+        optional(&mut m, "duration_ms", &self.duration_ms)?;
+        m.serialize_field("tool", c.tool.as_deref().unwrap_or(DEFAULT_TOOL))?;
+        m.serialize_field("author", &c.author)?;
+        optional(&mut m, "client_id", &self.client_id)?;
+        m.serialize_field("created", &c.created)?;
+        m.serialize_field("updated", &self.updated)?;
+        m.end()
+    }
+}
+
+/// The tool of a contour whose client named none.
+pub const DEFAULT_TOOL: &str = "pen";
 
 /// Which contours to list: one cell and one author, optionally narrowed.
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -551,13 +551,14 @@ pub fn run_preloaded(cfg: &LoadConfig, preload: usize) -> anyhow::Result<LoadRep
         let mut stored: Model = Model::new();
         live_contours += rows.len();
         for c in rows {
-            if c.author != r.user {
+            let contour = c.contour;
+            if contour.author != r.user {
                 crossed += 1;
             }
             stored
-                .entry((c.label, c.index))
+                .entry((contour.label, contour.slice.index))
                 .or_default()
-                .insert(c.id, c.points);
+                .insert(c.id, contour.points);
         }
         for (key, m) in &r.model {
             for (id, points) in m {

@@ -86,11 +86,9 @@ pub(super) async fn add_contour(
         axis,
         index: body.index,
     };
-    let (stored, created) = state.store.add_contour(
-        &key,
-        body.contour,
-        body.client_id,
-    )?;
+    let (stored, created) = state
+        .store
+        .add_contour(&key, body.contour, body.client_id)?;
     let status = if created {
         StatusCode::CREATED
     } else {

@@ -11,7 +11,7 @@ use super::users::user_from_row;
 use super::{Store, axis_str, json_err, parse_axis};
 use crate::model::*;
 use crate::{Result, StoreError, now_rfc3339};
-use interslice_core::Axis;
+use interslice_core::{Axis, Contour, SliceRef};
 use rusqlite::{OptionalExtension, Transaction, params};
 
 /// The five columns of a slice key as SQL parameters `?1..?5`, in the order
@@ -109,24 +109,28 @@ fn contour_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<StoredContour> {
     Ok(StoredContour {
         id: r.get(0)?,
         cell: r.get(1)?,
-        label: r.get(2)?,
-        axis: parse_axis(&r.get::<_, String>(3)?)?,
-        index: r.get::<_, i64>(4)? as usize,
-        points: serde_json::from_str(&points).map_err(json_err)?,
-        pressure: pressure
-            .map(|p| serde_json::from_str(&p))
-            .transpose()
-            .map_err(json_err)?,
-        times_ms: times
-            .map(|p| serde_json::from_str(&p))
-            .transpose()
-            .map_err(json_err)?,
+        contour: Contour {
+            slice: SliceRef {
+                axis: parse_axis(&r.get::<_, String>(3)?)?,
+                index: r.get::<_, i64>(4)? as usize,
+            },
+            label: r.get(2)?,
+            points: serde_json::from_str(&points).map_err(json_err)?,
+            author: r.get(10)?,
+            created: r.get(13)?,
+            pressure: pressure
+                .map(|p| serde_json::from_str(&p))
+                .transpose()
+                .map_err(json_err)?,
+            times_ms: times
+                .map(|p| serde_json::from_str(&p))
+                .transpose()
+                .map_err(json_err)?,
+            tool: Some(r.get(9)?),
+        },
         duration_ms: r.get(8)?,
-        tool: r.get(9)?,
-        author: r.get(10)?,
         user_id: r.get(11)?,
         client_id: r.get(12)?,
-        created: r.get(13)?,
         updated: r.get(14)?,
     })
 }
@@ -203,17 +207,19 @@ fn insert_contour(tx: &Transaction<'_>, key: &SliceKey, c: &StoredContour) -> Re
         key.label,
         axis_str(key.axis),
         key.index as i64,
-        serde_json::to_string(&c.points).expect("points serialise"),
-        c.pressure
+        serde_json::to_string(&c.contour.points).expect("points serialise"),
+        c.contour
+            .pressure
             .as_ref()
             .map(|p| serde_json::to_string(p).expect("serialise")),
-        c.times_ms
+        c.contour
+            .times_ms
             .as_ref()
             .map(|p| serde_json::to_string(p).expect("serialise")),
         c.duration_ms,
-        c.tool,
+        c.contour.tool.as_deref().unwrap_or(DEFAULT_TOOL),
         c.client_id,
-        c.created,
+        c.contour.created,
         c.updated,
     ])?;
     Ok(tx.last_insert_rowid())
@@ -266,18 +272,22 @@ fn stored_from_new(key: &SliceKey, c: NewContour, client_id: Option<String>) -> 
     StoredContour {
         id: 0,
         cell: key.cell.clone(),
-        label: key.label,
-        axis: key.axis,
-        index: key.index,
-        points: c.points,
-        pressure: c.pressure,
-        times_ms: c.times_ms,
+        contour: Contour {
+            slice: SliceRef {
+                axis: key.axis,
+                index: key.index,
+            },
+            label: key.label,
+            points: c.points,
+            author: String::new(),
+            created: now.clone(),
+            pressure: c.pressure,
+            times_ms: c.times_ms,
+            tool: Some(c.tool.unwrap_or_else(|| DEFAULT_TOOL.to_string())),
+        },
         duration_ms,
-        tool: c.tool.unwrap_or_else(|| "pen".to_string()),
-        author: String::new(),
         user_id: key.user_id,
         client_id,
-        created: now.clone(),
         updated: now,
     }
 }

@@ -177,7 +177,10 @@ fn the_audit_log_replays_to_the_tracing() {
         }
         for id in ids(&d["added"]) {
             let c = s.archived_contour(id).unwrap().unwrap();
-            assert_eq!((c.label as u64, c.index as u64), (slice.0, slice.2));
+            assert_eq!(
+                (c.contour.label as u64, c.contour.slice.index as u64),
+                (slice.0, slice.2)
+            );
             assert!(live.insert(id), "{e:?} adds {id} twice");
         }
     }
@@ -221,18 +224,22 @@ fn v1_contour(id: i64, user: i64, x: f64, client_id: Option<&str>) -> StoredCont
     StoredContour {
         id,
         cell: "cell1".into(),
-        label: 1,
-        axis: Axis::Z,
-        index: 0,
-        points: vec![[x, x], [x + 4.5, x], [x + 4.5, x + 4.25]],
-        pressure: Some(vec![0.5, 0.25, 1.0]),
-        times_ms: Some(vec![0.0, 10.5, 35.0]),
+        contour: interslice_core::Contour {
+            slice: interslice_core::SliceRef {
+                axis: Axis::Z,
+                index: 0,
+            },
+            label: 1,
+            points: vec![[x, x], [x + 4.5, x], [x + 4.5, x + 4.25]],
+            author: "alice".into(),
+            created: format!("2026-01-0{id}T00:00:00.000Z"),
+            pressure: Some(vec![0.5, 0.25, 1.0]),
+            times_ms: Some(vec![0.0, 10.5, 35.0]),
+            tool: Some("pen".into()),
+        },
         duration_ms: Some(35.0),
-        tool: "pen".into(),
-        author: "alice".into(),
         user_id: user,
         client_id: client_id.map(str::to_string),
-        created: format!("2026-01-0{id}T00:00:00.000Z"),
         updated: format!("2026-01-0{id}T00:00:00.000Z"),
     }
 }
@@ -266,7 +273,7 @@ fn version_1_history_is_converted_to_deltas() {
                 j(&row, "points"),
                 j(&row, "pressure"),
                 j(&row, "times_ms"),
-                c2.created
+                c2.contour.created
             ],
         )
         .unwrap();

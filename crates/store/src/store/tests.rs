@@ -95,16 +95,16 @@ fn contours_round_trip_with_provenance() {
         .add_contour(&key(&u, 2, 7), square(1.0), Some("abc".into()))
         .unwrap();
     assert!(created);
-    assert_eq!(c.author, "alice");
+    assert_eq!(c.contour.author, "alice");
     assert_eq!(c.duration_ms, Some(35.0));
-    assert_eq!(c.points, square(1.0).points);
+    assert_eq!(c.contour.points, square(1.0).points);
     // Idempotent retry.
     let (again, created) = s
         .add_contour(&key(&u, 2, 7), square(9.0), Some("abc".into()))
         .unwrap();
     assert!(!created);
     assert_eq!(again.id, c.id);
-    assert_eq!(again.points, square(1.0).points);
+    assert_eq!(again.contour.points, square(1.0).points);
     let all = s
         .contours(&ContourQuery {
             cell: "cell1".into(),
