@@ -809,7 +809,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -839,7 +839,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -869,7 +869,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -903,7 +903,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
                 /** @description contour id */
                 id: number;
@@ -933,7 +933,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -963,7 +963,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -997,7 +997,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1027,7 +1027,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1057,7 +1057,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1091,11 +1091,11 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
-                /** @description x, y or z */
+                /** @description `x`, `y` or `z`. */
                 axis: string;
-                /** @description slice index along the axis */
+                /** @description Slice index along the axis. */
                 index: number;
             };
             cookie?: never;
@@ -1125,7 +1125,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1155,7 +1155,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1189,7 +1189,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1219,7 +1219,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1249,7 +1249,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
                 /** @description result id */
                 result: number;
@@ -1281,7 +1281,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1311,7 +1311,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1345,7 +1345,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1375,11 +1375,11 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
-                /** @description x, y or z */
+                /** @description `x`, `y` or `z`. */
                 axis: string;
-                /** @description slice index along the axis */
+                /** @description Slice index along the axis. */
                 index: number;
             };
             cookie?: never;
@@ -1409,11 +1409,11 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
-                /** @description x, y or z */
+                /** @description `x`, `y` or `z`. */
                 axis: string;
-                /** @description slice index along the axis */
+                /** @description Slice index along the axis. */
                 index: number;
             };
             cookie?: never;
@@ -1447,11 +1447,11 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
-                /** @description x, y or z */
+                /** @description `x`, `y` or `z`. */
                 axis: string;
-                /** @description slice index along the axis */
+                /** @description Slice index along the axis. */
                 index: number;
             };
             cookie?: never;
@@ -1481,7 +1481,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1511,7 +1511,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;
@@ -1541,7 +1541,7 @@ export interface operations {
             query?: never;
             header?: never;
             path: {
-                /** @description cell id (GET /api/cells) */
+                /** @description Cell id (`GET /api/cells`). */
                 cell: string;
             };
             cookie?: never;

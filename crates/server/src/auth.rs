@@ -1,7 +1,7 @@
 //! Sign-in: the session cookie, the current-user extractor, login/logout/me.
 use crate::SharedState;
 use crate::error::{ApiError, ApiJson};
-use crate::openapi::ERRORS;
+use crate::openapi::ApiErrors;
 use axum::extract::{FromRequestParts, State};
 use axum::http::header::{COOKIE, SET_COOKIE};
 use axum::http::request::Parts;
@@ -97,7 +97,7 @@ fn cookie(token: &str, max_age: i64) -> HeaderValue {
     request_body = LoginBody,
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub async fn login(
@@ -134,7 +134,7 @@ pub async fn login(
     summary = "Sign out",
     responses(
         (status = 204, description = "done"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub async fn logout(
@@ -157,7 +157,7 @@ pub async fn logout(
     summary = "The signed-in user",
     responses(
         (status = 200, description = "success", content_type = "application/json", body = Me),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub async fn me(State(state): State<SharedState>, Auth(user): Auth) -> axum::Json<Me> {

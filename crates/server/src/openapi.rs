@@ -7,7 +7,22 @@ use std::sync::OnceLock;
 use utoipa::openapi::{InfoBuilder, OpenApi};
 
 /// What every route may answer besides success, for the document.
-pub(crate) const ERRORS: &str = "{\"error\": \"one line\"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large";
+#[derive(utoipa::IntoResponses)]
+#[response(
+    status = "4XX",
+    description = "{\"error\": \"one line\"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large"
+)]
+pub(crate) struct ApiErrors;
+
+/// The `{cell}` of a cell's routes, for the document (handlers take it with
+/// `ApiPath<String>`).
+#[derive(utoipa::IntoParams)]
+#[into_params(parameter_in = Path)]
+#[allow(dead_code)]
+pub(crate) struct CellPath {
+    /// Cell id (`GET /api/cells`).
+    cell: String,
+}
 
 /// The document's title block.
 pub(crate) fn info() -> utoipa::openapi::Info {
@@ -35,7 +50,7 @@ pub fn document() -> &'static OpenApi {
     summary = "This document",
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub async fn serve() -> Response {

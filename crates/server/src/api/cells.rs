@@ -77,7 +77,7 @@ pub(super) async fn summary(
     summary = "Cells with the user's status (queue=true hides finished ones)",
     responses(
         (status = 200, description = "success", content_type = "application/json", body = Vec<CellSummary>),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn list_cells(
@@ -141,7 +141,7 @@ pub(super) async fn list_cells(
     summary = "Each user's status, seconds and contour count per cell (reviewers: everyone; tracers: their own)",
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn progress(
@@ -174,12 +174,10 @@ pub struct CellDetail {
     path = "/api/cells/{cell}",
     tag = "cells",
     summary = "A cell's metadata, range and labels",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn cell_detail(
@@ -209,12 +207,10 @@ pub(super) struct StatusBody {
     path = "/api/cells/{cell}/status",
     tag = "cells",
     summary = "Set the user's status of a cell",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn set_status(
@@ -235,12 +231,10 @@ pub(super) async fn set_status(
     path = "/api/cells/{cell}/histogram",
     tag = "cells",
     summary = "256-bin intensity histogram",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn histogram(
@@ -265,12 +259,10 @@ pub(super) struct TimeBody {
     path = "/api/cells/{cell}/time",
     tag = "cells",
     summary = "Add tracing time (seconds)",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn add_time(
@@ -289,14 +281,10 @@ pub(super) async fn add_time(
     path = "/api/cells/{cell}/slices/{axis}/{index}",
     tag = "cells",
     summary = "Raw little-endian slice pixels (X-Width, X-Height, X-Dtype)",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-        ("axis" = String, Path, description = "x, y or z"),
-        ("index" = usize, Path, description = "slice index along the axis"),
-    ),
+    params(SlicePath),
     responses(
         (status = 200, description = "success", content_type = "application/octet-stream"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn slice(

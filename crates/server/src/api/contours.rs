@@ -14,12 +14,10 @@ pub(super) struct ContoursQuery {
     path = "/api/cells/{cell}/contours",
     tag = "contours",
     summary = "The user's contours (reviewers: ?user=)",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn list_contours(
@@ -63,12 +61,10 @@ pub struct AddContour {
     tag = "contours",
     summary = "Add a contour (client_id makes retries idempotent)",
     request_body = AddContour,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 201, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn add_contour(
@@ -112,14 +108,10 @@ pub struct ReplaceSlice {
     tag = "contours",
     summary = "Replace a label's contours on a slice",
     request_body = ReplaceSlice,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-        ("axis" = String, Path, description = "x, y or z"),
-        ("index" = usize, Path, description = "slice index along the axis"),
-    ),
+    params(SlicePath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn replace_slice(
@@ -147,12 +139,12 @@ pub(super) async fn replace_slice(
     tag = "contours",
     summary = "Delete one of the user's contours",
     params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        CellPath,
         ("id" = i64, Path, description = "contour id"),
     ),
     responses(
         (status = 204, description = "done"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn delete_contour(
@@ -178,14 +170,10 @@ pub(super) struct LabelBody {
     path = "/api/cells/{cell}/slices/{axis}/{index}/empty",
     tag = "contours",
     summary = "Mark a slice drawn with no contour for a label",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-        ("axis" = String, Path, description = "x, y or z"),
-        ("index" = usize, Path, description = "slice index along the axis"),
-    ),
+    params(SlicePath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn mark_empty(
@@ -221,12 +209,10 @@ pub(super) struct DrawnQuery {
     path = "/api/cells/{cell}/drawn",
     tag = "contours",
     summary = "Drawn slices of a label along an axis",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn drawn(
@@ -246,12 +232,10 @@ pub(super) async fn drawn(
     path = "/api/cells/{cell}/undo",
     tag = "contours",
     summary = "Undo the user's last change",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn undo(
@@ -269,12 +253,10 @@ pub(super) async fn undo(
     path = "/api/cells/{cell}/redo",
     tag = "contours",
     summary = "Redo the user's last undone change",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn redo(

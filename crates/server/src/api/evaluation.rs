@@ -132,12 +132,10 @@ pub(super) fn resolve_source(
     tag = "evaluation",
     summary = "Metrics of a test against a reference",
     request_body = EvaluateBody,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn evaluate(

@@ -21,12 +21,10 @@ pub(super) struct ExportQuery {
     path = "/api/cells/{cell}/export",
     tag = "interpolation",
     summary = "Download the interpolated label volume or the contours",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/octet-stream"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn export(

@@ -56,12 +56,10 @@ pub struct InterpolateAnswer {
     tag = "interpolation",
     summary = "Interpolate a label; preview contours per slice",
     request_body = InterpolateBody,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json", body = InterpolateAnswer),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn interpolate(
@@ -155,12 +153,10 @@ pub struct ResultInfo {
     path = "/api/cells/{cell}/results",
     tag = "interpolation",
     summary = "The user's stored interpolation results, newest first (reviewers: ?user=)",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json", body = Vec<ResultInfo>),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn list_results(
@@ -194,12 +190,12 @@ pub(super) async fn list_results(
     tag = "interpolation",
     summary = "Surface mesh of a result, physical units",
     params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
+        CellPath,
         ("result" = i64, Path, description = "result id"),
     ),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn result_mesh(

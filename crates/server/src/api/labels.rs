@@ -17,7 +17,7 @@ pub struct MethodInfo {
     summary = "Interpolation methods, the default first",
     responses(
         (status = 200, description = "success", content_type = "application/json", body = Vec<MethodInfo>),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn methods() -> Json<Vec<MethodInfo>> {
@@ -36,7 +36,7 @@ pub(super) async fn methods() -> Json<Vec<MethodInfo>> {
     summary = "The project's labels",
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn labels(
@@ -64,7 +64,7 @@ pub struct NewLabel {
     request_body = NewLabel,
     responses(
         (status = 201, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn add_label(

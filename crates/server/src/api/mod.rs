@@ -2,7 +2,7 @@
 use crate::SharedState;
 use crate::auth::{self, Auth, reader_target};
 use crate::error::{ApiError, ApiJson, ApiPath, ApiQuery};
-use crate::openapi::{self, ERRORS};
+use crate::openapi::{self, ApiErrors, CellPath};
 use axum::Router;
 use axum::extract::State;
 use axum::http::{HeaderValue, StatusCode, header};
@@ -96,9 +96,15 @@ fn parse_index(s: &str) -> Result<usize, ApiError> {
 
 /// The `{cell}`, `{axis}` and `{index}` of a slice route, as given; handlers
 /// parse them in their own order ([`SlicePath::parse`], then the cell).
+#[derive(utoipa::IntoParams)]
+#[into_params(parameter_in = Path)]
 struct SlicePath {
+    /// Cell id (`GET /api/cells`).
     cell: String,
+    /// `x`, `y` or `z`.
     axis: String,
+    /// Slice index along the axis.
+    #[param(value_type = usize)]
     index: String,
 }
 

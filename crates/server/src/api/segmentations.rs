@@ -78,12 +78,10 @@ pub(super) fn load_segmentation(
     path = "/api/cells/{cell}/segmentations",
     tag = "evaluation",
     summary = "Computed segmentations and files under segmentations/<cell>/",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json", body = Vec<SegmentationInfo>),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn list_segmentations(
@@ -123,12 +121,10 @@ pub(super) struct UploadQuery {
     path = "/api/cells/{cell}/segmentations/upload",
     tag = "evaluation",
     summary = "Upload a label volume file (body; format from ?name=) as a segmentation",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 201, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn upload_segmentation(
@@ -196,12 +192,10 @@ pub struct SegmentBody {
     tag = "evaluation",
     summary = "Compute a threshold segmentation",
     request_body = SegmentBody,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 201, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn add_segmentation(
@@ -270,14 +264,10 @@ pub(super) struct OverlayQuery {
     path = "/api/cells/{cell}/overlay/{axis}/{index}",
     tag = "evaluation",
     summary = "u8 per pixel: 0 TN, 1 TP, 2 FP, 3 FN",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-        ("axis" = String, Path, description = "x, y or z"),
-        ("index" = usize, Path, description = "slice index along the axis"),
-    ),
+    params(SlicePath),
     responses(
         (status = 200, description = "success", content_type = "application/octet-stream"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn overlay(
@@ -344,12 +334,10 @@ pub struct RatingBody {
     path = "/api/cells/{cell}/ratings",
     tag = "evaluation",
     summary = "Ratings of the cell's segmentations",
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 200, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn list_ratings(
@@ -371,12 +359,10 @@ pub(super) async fn list_ratings(
     tag = "evaluation",
     summary = "Rate a segmentation 1..5",
     request_body = RatingBody,
-    params(
-        ("cell" = String, Path, description = "cell id (GET /api/cells)"),
-    ),
+    params(CellPath),
     responses(
         (status = 201, description = "success", content_type = "application/json"),
-        (status = "4XX", description = ERRORS),
+        ApiErrors,
     ),
 )]
 pub(super) async fn add_rating(
