@@ -38,6 +38,23 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/cells/{cell}/advice": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** The slices of a label to trace next, best first, and the predicted Dice */
+        get: operations["advice"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/cells/{cell}/contours": {
         parameters: {
             query?: never;
@@ -805,6 +822,36 @@ export interface operations {
         };
     };
     cell_detail: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description Cell id (`GET /api/cells`). */
+                cell: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description success */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": unknown;
+                };
+            };
+            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
+            "4XX": {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+        };
+    };
+    advice: {
         parameters: {
             query?: never;
             header?: never;

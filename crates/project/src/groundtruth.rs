@@ -143,6 +143,28 @@ pub fn sparse_mask(
     Ok((mask, drawn))
 }
 
+/// Which slices of one label along one axis to trace next, best first
+/// ([`interslice_interp::advise`]): the server's suggestion for the tracer.
+pub fn advise_label(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+    count: usize,
+    method: Option<&str>,
+) -> Result<interslice_interp::advise::Advice, ProjectError> {
+    let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
+    let data = mask
+        .data()
+        .iter()
+        .map(|&b| if b { label } else { 0 })
+        .collect();
+    let sparse = LabelVolume::from_vec(geometry.clone(), data)?;
+    Ok(interslice_interp::advise::advise(
+        &sparse, axis, &drawn, count, method, None,
+    )?)
+}
+
 /// Interpolate one label of one tracing along one axis; `cancel` is checked
 /// before and after the method runs (one label is the unit of work).
 pub fn interpolate_label(

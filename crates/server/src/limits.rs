@@ -94,6 +94,20 @@ pub fn slice_contours(n: usize) -> Result<(), ApiError> {
     Ok(())
 }
 
+/// Most slices one advice request may suggest.
+pub const MAX_ADVICE_COUNT: usize = 50;
+
+/// The number of suggested slices asked for: 1..=[`MAX_ADVICE_COUNT`].
+pub fn advice_count(n: usize) -> Result<usize, ApiError> {
+    if (1..=MAX_ADVICE_COUNT).contains(&n) {
+        Ok(n)
+    } else {
+        Err(ApiError::bad_request(format!(
+            "count {n} is out of range (1..={MAX_ADVICE_COUNT})"
+        )))
+    }
+}
+
 /// A password of at most [`MAX_PASSWORD_BYTES`] bytes.
 pub fn password(pw: &str) -> Result<(), ApiError> {
     if pw.len() > MAX_PASSWORD_BYTES {

@@ -232,3 +232,58 @@ pub(super) async fn result_mesh(
     );
     Ok(resp)
 }
+
+#[derive(Deserialize)]
+pub(super) struct AdviceQuery {
+    label: u16,
+    #[serde(default)]
+    axis: Option<String>,
+    #[serde(default)]
+    count: Option<usize>,
+    #[serde(default)]
+    method: Option<String>,
+}
+
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/advice",
+    tag = "interpolation",
+    summary = "The slices of a label to trace next, best first, and the predicted Dice",
+    params(CellPath),
+    responses(
+        (status = 200, description = "success", content_type = "application/json"),
+        ApiErrors,
+    ),
+)]
+pub(super) async fn advice(
+    State(state): State<SharedState>,
+    Auth(me): Auth,
+    ApiPath(cell): ApiPath<String>,
+    ApiQuery(q): ApiQuery<AdviceQuery>,
+) -> Result<Response, ApiError> {
+    let axis = parse_axis(q.axis.as_deref().unwrap_or("z"))?;
+    check_label(&state, q.label)?;
+    let count = crate::limits::advice_count(q.count.unwrap_or(3))?;
+    // The method is checked here so a bad name is a 400 before any work.
+    method_by_name(q.method.as_deref())?;
+    let c = state.cell(&cell).await?;
+    let st = state.clone();
+    let advice = job(&state, move |cancel| {
+        cancel.check()?;
+        let tracing = groundtruth::StoredTracing {
+            store: &st.store,
+            cell: &cell,
+            user_id: me.id,
+        };
+        Ok(groundtruth::advise_label(
+            &tracing,
+            c.volume.geometry(),
+            q.label,
+            axis,
+            count,
+            q.method.as_deref(),
+        )?)
+    })
+    .await?;
+    Ok(Json(advice).into_response())
+}

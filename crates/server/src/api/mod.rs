@@ -63,6 +63,7 @@ pub fn router() -> (Router<SharedState>, OpenApi) {
             .routes(routes!(undo))
             .routes(routes!(redo))
             .routes(routes!(interpolate))
+            .routes(routes!(advice))
             .routes(routes!(list_results))
             .routes(routes!(result_mesh))
             .routes(routes!(export))
