@@ -145,6 +145,23 @@ export async function startBrowser({ width = 1600, height = 1000 } = {}) {
   };
 }
 
+/**
+ * The outlines of `label` in the label volume `gt` per slice along `axis`
+ * (every `every`-th slice), from `interslice contours extract`.
+ */
+export function outlines(server, gt, every, label, axis = "z") {
+  const file = path.join(server.scratch, `contours-${every}-${axis}.json`);
+  cli("contours", "extract", gt, "--every", String(every), "--axis", axis, "--out", file);
+  const doc = JSON.parse(fs.readFileSync(file, "utf8"));
+  const by = new Map();
+  for (const c of doc.contours) {
+    if (c.label !== label || c.axis !== axis) continue;
+    if (!by.has(c.index)) by.set(c.index, []);
+    by.get(c.index).push(c.points);
+  }
+  return by;
+}
+
 /** Sign in by name on the sign-in form and wait for the cell list. */
 export async function signIn(page, url, name) {
   await page.goto(url);
@@ -415,4 +432,18 @@ export async function greysIn(page, axis, lo, hi) {
     px.map(([u, v]) => [u, v]),
   );
   return { n: px.length, min: Math.min(...greys), max: Math.max(...greys) };
+}
+
+/**
+ * Read an 8-bit `.nii` label volume (what `export?format=nii` and
+ * `interslice contours rasterize --out X.nii` write for labels up to 255):
+ * its dims and voxels, x fastest.
+ */
+export function readNiftiU8(file) {
+  const buf = fs.readFileSync(file);
+  const dims = [1, 2, 3].map((n) => buf.readInt16LE(40 + 2 * n));
+  if (buf.readInt16LE(70) !== 2) throw new Error(`${file}: not an 8-bit NIfTI`);
+  const offset = Math.round(buf.readFloatLE(108));
+  const n = dims[0] * dims[1] * dims[2];
+  return { dims, values: new Uint8Array(buf.buffer, buf.byteOffset + offset, n) };
 }

@@ -13,6 +13,7 @@ import path from "node:path";
 import {
   cli,
   densify,
+  outlines,
   penStroke,
   shot,
   signIn,
@@ -43,20 +44,6 @@ const figures = { sliceSwitch: [], strokeLatency: [], saveLatency: [], previewLa
 async function collect() {
   const f = await br.page.evaluate(() => window.__interslice.tracer().figures);
   for (const k of Object.keys(figures)) figures[k].push(...f[k]);
-}
-
-/** The phantom's outlines of `label` per z slice, from `interslice contours extract`. */
-function outlines(gt, every, label) {
-  const file = path.join(demo.scratch, `contours-${every}.json`);
-  cli("contours", "extract", gt, "--every", String(every), "--out", file);
-  const doc = JSON.parse(fs.readFileSync(file, "utf8"));
-  const by = new Map();
-  for (const c of doc.contours) {
-    if (c.label !== label || c.axis !== "z") continue;
-    if (!by.has(c.index)) by.set(c.index, []);
-    by.get(c.index).push(c.points);
-  }
-  return by;
 }
 
 const summary = () => br.page.evaluate(() => window.__interslice.tracer().summary());
@@ -90,8 +77,8 @@ before(async () => {
   demo = await startDemo();
   br = await startBrowser();
   const gt = path.join(demo.dir, "ground_truth", `${CELL}_labels.nii.gz`);
-  sparse = outlines(gt, STEP, 2);
-  dense = outlines(gt, 1, 2);
+  sparse = outlines(demo, gt, STEP, 2);
+  dense = outlines(demo, gt, 1, 2);
   assert.ok(sparse.size >= 4, `the phantom's nucleus spans ${sparse.size} traced slices`);
 });
 

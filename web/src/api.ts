@@ -53,6 +53,27 @@ export type Cell = Omit<Schemas["CellSummary"], "dims" | "spacing" | "dtype" | "
   status: CellStatus;
 };
 
+/** One slice suggested to trace next (`GET .../advice`). No schema. */
+export interface Suggestion {
+  slice: number;
+  /** Wrong voxels tracing it is expected to correct. */
+  gain_voxels: number;
+  /** The expected rise of the result's Dice from tracing it. */
+  dice_gain: number;
+  /** The drawn slices around it. */
+  between: [number, number];
+}
+
+/** Which slices of a label to trace next, best first (`GET .../advice`). No schema. */
+export interface Advice {
+  axis: Axis;
+  drawn: number[];
+  suggestions: Suggestion[];
+  /** Predicted Dice of the interpolation of the tracing now. */
+  predicted_dice: number;
+  volume_voxels: number;
+}
+
 /** A label (component). No schema. */
 export interface Label {
   id: number;
@@ -292,6 +313,11 @@ export class Api {
   interpolate(id: string, label: number, axis: Axis, method?: string, preview = false): Promise<InterpResult> {
     const body: Schemas["InterpolateBody"] = { label, axis, preview, ...(method ? { method } : {}) };
     return this.json("POST", `/api/cells/${enc(id)}/interpolate`, body);
+  }
+  /** GET the slices of a label to trace next, best first. */
+  advice(id: string, label: number, axis: Axis, count = 3, method?: string): Promise<Advice> {
+    const m = method ? `&method=${enc(method)}` : "";
+    return this.json("GET", `/api/cells/${enc(id)}/advice?label=${label}&axis=${axis}&count=${count}${m}`);
   }
   /** GET the mesh of an interpolation result. */
   mesh(id: string, resultId: number): Promise<Mesh> {

@@ -31,6 +31,12 @@ export interface TracerElements {
   status: HTMLDivElement;
   /** Volume of the last preview. */
   volume: HTMLDivElement;
+  /** The next suggested slice, on the working view (click or G goes there). */
+  suggest: HTMLButtonElement;
+  /** The advice in words: next slice, its gain, predicted Dice, "done" hint. */
+  advice: HTMLDivElement;
+  /** The "done when" threshold, in % Dice. */
+  doneWhen: HTMLInputElement;
   done: HTMLInputElement;
   bright: HTMLInputElement;
   contrast: HTMLInputElement;
@@ -66,6 +72,8 @@ export interface LayoutActions {
   showList(): void;
   /** Show the 3D view (a click on its slot). */
   show3d(): void;
+  /** The "done when" threshold changed (a fraction of Dice; 0 = off). */
+  setDoneWhen(v: number): void;
 }
 
 /** The settings the controls start from. */
@@ -78,6 +86,8 @@ export interface LayoutStart {
   exports: [string, string][];
   /** The evaluation panel's section. */
   evalPanel: HTMLElement;
+  /** The "done when" threshold (a fraction of Dice). */
+  doneWhen: number;
 }
 
 /** Build the screen. */
@@ -151,6 +161,22 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
   });
   const windowBox = (testid: string, title: string) =>
     h("input", { testid, type: "number", step: "any", title, class: "num", onchange: () => act.manualWindow() });
+  const doneWhen = h("input", {
+    testid: "done-when",
+    type: "number",
+    min: "0",
+    max: "50",
+    step: "0.1",
+    class: "num",
+    value: String(Math.round(s.doneWhen * 1000) / 10),
+    title: "Done when one more slice is predicted to add less Dice than this (%; 0 turns the hint off)",
+    onchange: () => {
+      const v = Number(doneWhen.value);
+      const ok = Number.isFinite(v) && v >= 0 && v <= 50;
+      if (!ok) doneWhen.value = "0.5";
+      act.setDoneWhen(ok ? v / 100 : 0.005);
+    },
+  });
   const v3dHost = h("div", { class: "v3d-host" });
   const v3dMsg = h("div", { class: "v3d-msg", testid: "view-3d-status" }, PROMPT_3D);
   const e: Omit<TracerElements, "root"> = {
@@ -166,6 +192,19 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
     unsaved: h("span", { class: "unsaved" }),
     status: h("div", { class: "statusline", testid: "status-line" }),
     volume: h("div", { class: "muted small" }),
+    suggest: h(
+      "button",
+      {
+        class: "suggest-badge",
+        testid: "suggest-badge",
+        title: "The slice to trace next (G goes there)",
+        hidden: true,
+        onclick: () => act.run("goto-suggested"),
+      },
+      "",
+    ),
+    advice: h("div", { class: "small", testid: "advice" }),
+    doneWhen,
     done,
     bright: range("brightness", "Brightness", s.brightness, (v) => act.setBrightness(v)),
     contrast: range("contrast", "Contrast", s.contrast, (v) => act.setContrast(v)),
@@ -254,6 +293,16 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
       row(e.autoPreview, h("label", { for: "auto-preview" }, "live preview on skipped slices")),
       row(btn("interpolate", "Interpolate", "Interpolate now (I)", () => act.run("interpolate"), "primary")),
       e.volume,
+    ),
+    h(
+      "section",
+      {},
+      h("h3", {}, "Next slice"),
+      e.advice,
+      row(
+        btn("goto-suggested", "Go to suggested", "Go to the next suggested slice (G)", () => act.run("goto-suggested")),
+      ),
+      row(h("label", {}, "done when one more slice adds < "), e.doneWhen, h("span", {}, "% Dice")),
     ),
     h(
       "section",

@@ -16,6 +16,7 @@ export type Action =
   | "undo"
   | "redo"
   | "interpolate"
+  | "goto-suggested"
   | "axis-x"
   | "axis-y"
   | "axis-z"
@@ -52,6 +53,7 @@ export const SHORTCUTS: Shortcut[] = [
   { keys: "Ctrl+Z", help: "Undo", action: "undo" },
   { keys: "Ctrl+Shift+Z / Ctrl+Y", help: "Redo", action: "redo" },
   { keys: "I", help: "Interpolate now", action: "interpolate" },
+  { keys: "G", help: "Go to the next suggested slice", action: "goto-suggested" },
   { keys: "X / Y / Z", help: "Trace on the x, y or z view", action: "axis-z" },
   { keys: "1 … 9", help: "Choose the component (label)", action: "label-1" },
   { keys: "+ / −", help: "Zoom in / out (or the mouse wheel)", action: "zoom-in" },
@@ -113,6 +115,9 @@ export function actionOf(e: KeyLike): Action | null {
     case "i":
     case "I":
       return "interpolate";
+    case "g":
+    case "G":
+      return "goto-suggested";
     case "x":
     case "X":
       return "axis-x";

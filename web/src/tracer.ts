@@ -23,6 +23,7 @@ import { ChangesPending, Tracings, type Target } from "./reconcile";
 import { cutRects, workingContours, type Traced } from "./scenes";
 import { actionOf, type Action } from "./shortcuts";
 import { statusLine } from "./statusline";
+import { Advisor, loadDoneWhen, renderAdvice, saveDoneWhen } from "./advice";
 import type { SliceView } from "./sliceview";
 import type { FinishedContour } from "./stroke";
 import { TimeTracker } from "./timetrack";
@@ -70,6 +71,8 @@ export class Tracer {
   private display: DisplayWindow;
   private tracings: Tracings;
   private previews: Previews;
+  private advisor: Advisor;
+  private doneWhen = loadDoneWhen(localStorage);
   private time: TimeTracker;
   private panel3d: Panel3D;
   private pen: Pen;
@@ -109,6 +112,10 @@ export class Tracer {
       },
       latency: (ms) => this.figures.previewLatency.push(ms),
       settled: () => this.updateStatus(),
+    });
+    this.advisor = new Advisor(api, cell.id, {
+      target: () => ({ label: this.st.label, axis: this.st.axis, method: this.st.method }),
+      show: (state) => renderAdvice(this.el, state, this.doneWhen),
     });
     this.pen = new Pen({
       workingAxis: () => this.st.axis,
@@ -164,6 +171,7 @@ export class Tracer {
           this.host.api.exportUrl(this.cell.id, f),
         ]),
         evalPanel: this.evalPanel.root,
+        doneWhen: this.doneWhen,
       },
       {
         run: (action) => this.doAction(action),
@@ -197,6 +205,11 @@ export class Tracer {
         showList: () => this.host.showList(),
         show3d: () => {
           if (!this.panel3d.on) void this.toggle3d(true);
+        },
+        setDoneWhen: (v) => {
+          this.doneWhen = v;
+          saveDoneWhen(localStorage, v);
+          renderAdvice(this.el, this.advisor.current, v);
         },
       },
     );
@@ -246,6 +259,7 @@ export class Tracer {
     this.syncControls();
     await this.refreshAll();
     if (this.tracings.drawn.size > 0) void this.runPreview(false);
+    this.advisor.refresh();
     this.evalPanel.start();
     this.ready = true;
     this.time.start();
@@ -291,6 +305,7 @@ export class Tracer {
 
   private placeViews(): void {
     this.views.place(this.el, this.st.axis);
+    this.el.main.append(this.el.suggest);
   }
 
   // ---------- window/level ----------
@@ -388,6 +403,7 @@ export class Tracer {
       this.updateStatus();
       const { label, axis } = this.target;
       if (this.tracings.drawn.size > 0 && !this.previews.get(label, axis)) void this.runPreview(false);
+      this.advisor.refresh();
     });
   }
 
@@ -526,6 +542,7 @@ export class Tracer {
       this.paintAll();
       this.updateStatus();
       this.previews.schedule();
+      this.advisor.refresh();
     } catch (e) {
       this.host.toast(e instanceof ChangesPending ? e.message : `${which}: ${(e as Error).message}`, true);
     }
@@ -543,8 +560,10 @@ export class Tracer {
     else void this.tracings.reload(this.target).then(() => this.paintAll());
     const label = op.kind === "contour" ? op.body.label : op.label;
     const axis = op.kind === "contour" ? op.body.axis : op.axis;
-    if (label === this.st.label && axis === this.st.axis && this.host.outbox.pending.length === 0)
+    if (label === this.st.label && axis === this.st.axis && this.host.outbox.pending.length === 0) {
       this.previews.schedule();
+      this.advisor.refresh();
+    }
   }
 
   /** Called when the outbox changed. */
@@ -670,6 +689,12 @@ export class Tracer {
       case "interpolate":
         void this.runPreview(true);
         return;
+      case "goto-suggested": {
+        const next = this.advisor.next(this.st.label, this.st.axis);
+        if (next === null) this.host.toast("no suggested slice yet: trace at least two slices");
+        else void this.goto(next);
+        return;
+      }
       case "axis-x":
       case "axis-y":
       case "axis-z":
@@ -717,7 +742,7 @@ export class Tracer {
   /** Resolves when every change is saved and no preview is running. */
   async idle(): Promise<void> {
     await this.host.outbox.flush();
-    for (let n = 0; n < 600 && (!this.previews.idle || this.host.outbox.pending.length); n++)
+    for (let n = 0; n < 600 && (!this.previews.idle || !this.advisor.idle || this.host.outbox.pending.length); n++)
       await new Promise((r) => setTimeout(r, 25));
   }
 
@@ -733,6 +758,7 @@ export class Tracer {
     preview: boolean;
     overlay: boolean;
     pending: number;
+    suggested: number | null;
   } {
     return {
       axis: this.st.axis,
@@ -742,6 +768,7 @@ export class Tracer {
       preview: this.previews.get(this.st.label, this.st.axis) !== undefined,
       overlay: this.views.views[this.st.axis].scene.overlay !== null,
       pending: this.host.outbox.pending.length,
+      suggested: this.advisor.next(this.st.label, this.st.axis),
     };
   }
 }

@@ -1,0 +1,142 @@
+// Guided tracing end to end, against the real `interslice demo` server in
+// headless Chromium: trace the first and last slice of the nucleus, then
+// follow the suggestion key (G) three times, each time landing on the slice
+// the badge on the working view names and tracing it; the export reproduces
+// every traced slice and matches the phantom's nucleus.
+import { after, before, test } from "node:test";
+import assert from "node:assert/strict";
+import fs from "node:fs";
+import path from "node:path";
+import {
+  cli,
+  densify,
+  outlines,
+  penStroke,
+  readNiftiU8,
+  shot,
+  signIn,
+  startBrowser,
+  startDemo,
+  toClient,
+  waitTracer,
+} from "./harness.mjs";
+
+const CELL = "cell_001";
+const NUCLEUS = 2;
+
+let demo;
+let br;
+/** The phantom nucleus's outlines by z slice (every slice). */
+let dense;
+/** The z slices traced, in order. */
+const traced = [];
+
+const summary = () => br.page.evaluate(() => window.__interslice.tracer().summary());
+const idle = () => br.page.evaluate(() => window.__interslice.tracer().idle());
+
+async function traceSlice(axis, polys) {
+  for (const p of polys) await penStroke(br.cdp, densify(await toClient(br.page, axis, p)));
+  await idle();
+}
+
+async function gotoSlice(i) {
+  await br.page.getByTestId("slice-index").fill(String(i));
+  await br.page.getByTestId("slice-index").press("Enter");
+  await br.page
+    .getByTestId("status-slice")
+    .filter({ hasText: `slice ${i} /` })
+    .waitFor();
+}
+
+before(async () => {
+  demo = await startDemo();
+  br = await startBrowser();
+  dense = outlines(demo, path.join(demo.dir, "ground_truth", `${CELL}_labels.nii.gz`), 1, NUCLEUS);
+});
+
+after(async () => {
+  await br?.close();
+  await demo?.stop();
+});
+
+test("trace the outermost slices, then follow the suggestion key three times", async () => {
+  const { page } = br;
+  await signIn(page, demo.url, "carol");
+  await page.getByTestId(`open-cell-${CELL}`).click();
+  await waitTracer(page, CELL);
+  await page.getByTestId("label-select").selectOption(String(NUCLEUS));
+  const idx = [...dense.keys()].sort((a, b) => a - b);
+  // Before two slices are drawn there is no suggestion.
+  assert.equal((await summary()).suggested, null);
+  for (const i of [idx[0], idx[idx.length - 1]]) {
+    await gotoSlice(i);
+    await traceSlice("z", dense.get(i));
+    traced.push(i);
+  }
+  for (let round = 0; round < 3; round++) {
+    await page.waitForFunction(() => window.__interslice.tracer().summary().suggested !== null);
+    const s = (await summary()).suggested;
+    assert.ok(!traced.includes(s) && s > idx[0] && s < idx[idx.length - 1], `suggested ${s} is undrawn, inside`);
+    const badge = page.getByTestId("suggest-badge");
+    assert.equal(await badge.getAttribute("data-slice"), String(s));
+    assert.ok((await badge.textContent()).includes(`z = ${s}`));
+    if (round === 0) await shot(page, "suggested-slice");
+    await page.getByTestId("view-z").focus();
+    await page.keyboard.press("g");
+    await page
+      .getByTestId("status-slice")
+      .filter({ hasText: `slice ${s} /` })
+      .waitFor();
+    assert.equal((await summary()).index, s, "G lands on the suggested slice");
+    await traceSlice("z", dense.get(s));
+    traced.push(s);
+    // The suggestion refreshes after the saved contour: never a traced slice.
+    await page.waitForFunction((t) => {
+      const n = window.__interslice.tracer().summary().suggested;
+      return n !== null && !t.includes(n);
+    }, traced);
+  }
+  const sum = await summary();
+  assert.deepEqual(
+    sum.drawn,
+    [...traced].sort((a, b) => a - b),
+  );
+  assert.equal(sum.pending, 0);
+  const advice = await page.getByTestId("advice").textContent();
+  assert.match(advice, /predicted Dice 0\.\d{3}/);
+});
+
+test("the export reproduces every traced slice and matches the phantom's nucleus", async () => {
+  const { page } = br;
+  const fetchTo = async (url, file) => {
+    const bytes = await page.evaluate(
+      async (u) => Array.from(new Uint8Array(await (await fetch(u)).arrayBuffer())),
+      url,
+    );
+    fs.writeFileSync(file, Buffer.from(bytes));
+  };
+  const exported = path.join(demo.scratch, "guided.nii");
+  const contours = path.join(demo.scratch, "guided.contours.json");
+  const rasterised = path.join(demo.scratch, "guided-traced.nii");
+  await fetchTo(`/api/cells/${CELL}/export?format=nii&label=${NUCLEUS}`, exported);
+  await fetchTo(`/api/cells/${CELL}/export?format=contours`, contours);
+  cli("contours", "rasterize", contours, "--out", rasterised);
+  const e = readNiftiU8(exported);
+  const r = readNiftiU8(rasterised);
+  assert.deepEqual(e.dims, r.dims);
+  const [nx, ny] = e.dims;
+  for (const k of traced) {
+    let differ = 0;
+    let inside = 0;
+    for (let o = k * nx * ny; o < (k + 1) * nx * ny; o++) {
+      const want = r.values[o] === NUCLEUS;
+      if (want) inside++;
+      if ((e.values[o] === NUCLEUS) !== want) differ++;
+    }
+    assert.ok(inside > 0, `slice ${k} has the traced nucleus`);
+    assert.equal(differ, 0, `slice ${k}: the export is the tracing exactly`);
+  }
+  const gt = path.join(demo.dir, "ground_truth", `${CELL}_labels.nii.gz`);
+  const m = JSON.parse(cli("evaluate", gt, exported, "--label", String(NUCLEUS), "--json"));
+  assert.ok(m.dice > 0.85, `5 guided slices: Dice ${m.dice}`);
+});
