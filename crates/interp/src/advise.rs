@@ -80,24 +80,72 @@ struct Gap {
 }
 
 impl Gap {
-    /// The best slice of the gap to draw and its gain, `None` without undrawn slices.
-    fn best(&self) -> Option<(usize, f64)> {
-        (self.b - self.a >= 2).then(|| {
-            let s = self.a + (self.b - self.a) / 2;
-            (s, self.gain(s))
+    /// Expected wrong voxels over the gap with `n` more slices evenly spaced
+    /// in it (at the slices of [`Gap::spread`]): the sum over the sub-gaps of
+    /// `ρ (L² − 1) / 6`, exact for whole-slice sub-gaps (a sub-gap of one
+    /// slice has no undrawn slice, so no error).
+    fn error_with(&self, n: usize) -> f64 {
+        let mut cuts = self.spread(n);
+        cuts.sort_unstable();
+        let mut prev = self.a;
+        let mut sum = 0.0;
+        for c in cuts.into_iter().chain([self.b]) {
+            let l = (c - prev) as f64;
+            sum += (l * l - 1.0) / 6.0;
+            prev = c;
+        }
+        self.rate * sum
+    }
+
+    /// The slices of `n` evenly spaced in the gap, the one nearest its middle
+    /// first (then outwards, lower first on ties).
+    fn spread(&self, n: usize) -> Vec<usize> {
+        let l = self.b - self.a;
+        let mut s: Vec<usize> = (1..=n)
+            .map(|j| self.a + (l * j + n.div_ceil(2)) / (n + 1))
+            .filter(|&x| x > self.a && x < self.b)
+            .collect();
+        s.dedup();
+        let mid2 = self.a + self.b;
+        s.sort_by_key(|&x| ((2 * x).abs_diff(mid2), x));
+        s
+    }
+}
+
+/// Where `count` more slices do the most good: the drawn gaps get slices one
+/// at a time, each to the gap whose error it lowers most (the error of a gap
+/// falls convexly with its slices, so this allocation is optimal), and each
+/// gap's slices are spread evenly in it. With equal rates this is uniform
+/// spacing; where the shape is harder to predict, the slices gather. Answers
+/// the slices with their gain (the drop of the error they make in the
+/// allocation) and their gap, best first.
+fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, Gap)> {
+    let mut n = vec![0usize; gaps.len()];
+    let mut gains: Vec<Vec<f64>> = vec![Vec::new(); gaps.len()];
+    for _ in 0..count {
+        let best = gaps
+            .iter()
+            .enumerate()
+            .filter(|(i, g)| n[*i] + 1 < g.b - g.a)
+            .map(|(i, g)| (i, g.error_with(n[i]) - g.error_with(n[i] + 1)))
+            .max_by(|x, y| x.1.total_cmp(&y.1).then(y.0.cmp(&x.0)));
+        let Some((i, gain)) = best else { break };
+        n[i] += 1;
+        gains[i].push(gain);
+    }
+    let mut out: Vec<(usize, f64, Gap)> = gaps
+        .iter()
+        .zip(&n)
+        .zip(&gains)
+        .flat_map(|((g, &k), gains)| {
+            g.spread(k)
+                .into_iter()
+                .zip(gains.iter().copied())
+                .map(move |(s, gain)| (s, gain, *g))
         })
-    }
-
-    fn gain(&self, s: usize) -> f64 {
-        self.rate * ((s - self.a) * (self.b - s)) as f64 / 3.0
-    }
-
-    /// Expected wrong voxels over the whole gap now.
-    fn error(&self) -> f64 {
-        let l = (self.b - self.a) as f64;
-        // Σ_t (t−a)(b−t)/L over the undrawn slices = (L² − 1)/6.
-        self.rate * (l * l - 1.0) / 6.0
-    }
+        .collect();
+    out.sort_by(|x, y| y.1.total_cmp(&x.1).then(x.0.cmp(&y.0)));
+    out
 }
 
 /// The per-gap rates and the volume of one label's tracing.
@@ -201,7 +249,7 @@ pub fn advise(
         })
         .collect::<Result<_, _>>()?;
     let volume: f64 = per_label.iter().map(|(_, v)| v).sum();
-    let mut gaps: Vec<Gap> = drawn
+    let gaps: Vec<Gap> = drawn
         .windows(2)
         .enumerate()
         .map(|(g, w)| Gap {
@@ -215,29 +263,17 @@ pub fn advise(
     } else {
         0.0
     };
-    let error: f64 = gaps.iter().map(Gap::error).sum();
+    let error: f64 = gaps.iter().map(|g| g.error_with(0)).sum();
     let predicted_dice = (1.0 - error * scale).clamp(0.0, 1.0);
-    let mut suggestions = Vec::new();
-    while suggestions.len() < count {
-        // The best gap; ties go to the lower slice, so the order is stable.
-        let Some((i, (s, gain))) = gaps
-            .iter()
-            .enumerate()
-            .filter_map(|(i, g)| g.best().map(|b| (i, b)))
-            .max_by(|x, y| x.1.1.total_cmp(&y.1.1).then(y.1.0.cmp(&x.1.0)))
-        else {
-            break;
-        };
-        let g = gaps[i];
-        suggestions.push(Suggestion {
-            slice: s,
+    let suggestions = allocate(&gaps, count)
+        .into_iter()
+        .map(|(slice, gain, g)| Suggestion {
+            slice,
             gain_voxels: gain,
             dice_gain: gain * scale,
             between: [g.a, g.b],
-        });
-        gaps[i] = Gap { b: s, ..g };
-        gaps.insert(i + 1, Gap { a: s, ..g });
-    }
+        })
+        .collect();
     Ok(Advice {
         axis,
         drawn,
@@ -252,35 +288,46 @@ mod tests {
     use super::*;
     use interslice_core::{Geometry, LengthUnit, Volume};
 
-    /// A gap model over a line: the gain is largest at the middle.
+    /// Equal rates spread the slices evenly, like uniform spacing; a gap
+    /// with a higher rate gets more of them; the error falls convexly.
     #[test]
-    fn the_gain_of_a_gap_peaks_at_its_middle_and_sums_to_the_error_drop() {
+    fn slices_go_where_the_error_drops_most_and_spread_in_their_gap() {
         let g = Gap {
             a: 10,
-            b: 20,
+            b: 40,
             rate: 3.0,
         };
-        let (s, best) = g.best().unwrap();
-        assert_eq!(s, 15);
-        for t in 11..20 {
-            assert!(g.gain(t) <= best + 1e-12);
-        }
-        // Splitting at s lowers the gap's error by about the gain.
-        let left = Gap { b: s, ..g };
-        let right = Gap { a: s, ..g };
-        let drop = g.error() - left.error() - right.error();
-        assert!(
-            (drop - best).abs() <= 0.05 * best + g.rate,
-            "{drop} vs {best}"
-        );
-        assert!(
-            Gap {
-                a: 3,
-                b: 4,
-                rate: 1.0
-            }
-            .best()
-            .is_none()
+        let drops: Vec<f64> = (0..5)
+            .map(|n| g.error_with(n) - g.error_with(n + 1))
+            .collect();
+        assert!(drops.windows(2).all(|w| w[0] > w[1]), "{drops:?}");
+        // One gap, three slices: its quarter points, the middle first.
+        let s: Vec<usize> = allocate(&[g], 3).iter().map(|x| x.0).collect();
+        assert_eq!(s, [25, 18, 33]);
+        // A gap three times as hard gets more slices than its equal twin.
+        let easy = Gap {
+            a: 0,
+            b: 20,
+            rate: 1.0,
+        };
+        let hard = Gap {
+            a: 20,
+            b: 40,
+            rate: 3.0,
+        };
+        let a = allocate(&[easy, hard], 4);
+        let in_hard = a.iter().filter(|x| x.0 > 20).count();
+        assert!(in_hard >= 3, "{a:?}");
+        assert!(a.windows(2).all(|w| w[0].1 >= w[1].1));
+        // No more slices than the gaps hold.
+        let tiny = Gap {
+            a: 3,
+            b: 5,
+            rate: 1.0,
+        };
+        assert_eq!(
+            allocate(&[tiny], 5).iter().map(|x| x.0).collect::<Vec<_>>(),
+            [4]
         );
     }
 

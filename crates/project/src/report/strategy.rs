@@ -1,9 +1,16 @@
-//! `study --strategy`: a simulated tracer who traces the outermost slices of
-//! the ground truth, then `budget` more slices chosen either uniformly or by
-//! the advice (`interslice_interp::advise`, asked again after each traced
-//! slice, as a tracer following the suggestion would), and the Dice of the
+//! `study --strategy`: a simulated tracer who traces each structure (label)
+//! on its own, as the tracing screen has one component traced at a time:
+//! its outermost slices, then `budget` more slices chosen either uniformly
+//! or by the advice (`interslice_interp::advise`), and the Dice of the
 //! interpolation against the ground truth at every budget: on the skipped
-//! slices and on the whole volume, the mean over the studied labels.
+//! slices of the structure and on the whole volume, per label and as the
+//! mean over the labels.
+//!
+//! The advised tracer knows its budget, as a tracer who set out to trace N
+//! more slices does: before each slice it asks for the advice on the slices
+//! it still has (`count` = what is left), traces the first, and asks again
+//! with what it learnt, so the advice can spread the remaining slices over
+//! the gaps instead of halving one gap after another.
 use super::write_text;
 use crate::error::ProjectError;
 use interslice_core::{Axis, LabelVolume, Volume};
@@ -44,18 +51,20 @@ impl Strategy {
     }
 }
 
-/// One strategy at one budget.
+/// One strategy at one budget for one label.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StrategyRow {
     /// The strategy.
     pub strategy: Strategy,
+    /// The label traced.
+    pub label: u16,
     /// Slices traced after the outermost two.
     pub budget: usize,
     /// Every traced slice, ascending.
     pub traced: Vec<usize>,
-    /// Mean over the labels of the Dice on the skipped slices.
+    /// Dice on the structure's skipped slices.
     pub dice_skipped: f64,
-    /// Mean over the labels of the Dice on the whole volume.
+    /// Dice on the whole volume.
     pub dice_volume: f64,
 }
 
@@ -65,7 +74,8 @@ pub struct Simulation<'a> {
     pub gt: &'a LabelVolume,
     /// Axis of the traced slices.
     pub axis: Axis,
-    /// The outermost slices showing any label.
+    /// The slices studied: each label's outermost slices are looked for
+    /// between these.
     pub first: usize,
     /// See `first`.
     pub last: usize,
@@ -92,85 +102,96 @@ pub fn uniform_slices(first: usize, last: usize, budget: usize) -> Vec<usize> {
     s
 }
 
+/// One label of the ground truth traced alone.
+struct Structure {
+    label: u16,
+    /// The ground truth of this label only.
+    gt: LabelVolume,
+    first: usize,
+    last: usize,
+}
+
 impl Simulation<'_> {
-    /// The advised slices in the order a tracer following the advice traces
-    /// them, at most `budget` (fewer when every slice is traced).
-    fn advised_order(&self, budget: usize) -> Result<Vec<usize>, ProjectError> {
-        let mut traced = vec![self.first, self.last];
-        let mut order = Vec::new();
-        for _ in 0..budget {
-            let sparse = sparse_of(self.gt, self.axis, &traced);
+    /// The label alone and its outermost slices (None when it is absent).
+    fn structure(&self, label: u16) -> Option<Structure> {
+        let gt = self.gt.map(|v| if v == label { label } else { 0 });
+        let present: Vec<usize> = (self.first..=self.last)
+            .filter(|&s| {
+                gt.slice(self.axis, s)
+                    .is_ok_and(|sl| sl.iter().any(|&v| v != 0))
+            })
+            .collect();
+        Some(Structure {
+            label,
+            first: *present.first()?,
+            last: *present.last()?,
+            gt,
+        })
+    }
+
+    /// The slices a tracer with `budget` more slices traces following the
+    /// advice, the outermost two included.
+    fn advised(&self, s: &Structure, budget: usize) -> Result<Vec<usize>, ProjectError> {
+        let mut traced = vec![s.first, s.last];
+        traced.dedup();
+        for left in (1..=budget).rev() {
+            let sparse = sparse_of(&s.gt, self.axis, &traced);
             let a = advise(
                 &sparse,
                 self.axis,
                 &traced,
-                1,
+                left,
                 self.method,
                 self.image.clone(),
             )?;
-            let Some(s) = a.suggestions.first() else {
+            let Some(next) = a.suggestions.first() else {
                 break;
             };
-            order.push(s.slice);
-            traced.push(s.slice);
+            traced.push(next.slice);
             traced.sort_unstable();
         }
-        Ok(order)
+        Ok(traced)
     }
 
-    /// Interpolate the ground truth's `traced` slices and score it.
-    fn score(&self, traced: &[usize]) -> Result<(f64, f64), ProjectError> {
+    /// Interpolate the structure's `traced` slices and score it.
+    fn score(&self, s: &Structure, traced: &[usize]) -> Result<(f64, f64), ProjectError> {
         let method = by_name_with_image(self.method, self.image.clone())?;
-        let sparse = sparse_of(self.gt, self.axis, traced);
+        let sparse = sparse_of(&s.gt, self.axis, traced);
         let out = interpolate_labels(method.as_ref(), &sparse, self.axis, traced)?;
         let n = self.gt.slice_count(self.axis);
-        let skipped: Vec<usize> = (self.first..=self.last)
-            .filter(|s| !traced.contains(s))
-            .collect();
+        let skipped: Vec<usize> = (s.first..=s.last).filter(|x| !traced.contains(x)).collect();
         let all: Vec<usize> = (0..n).collect();
-        let (mut sk, mut vol) = (0.0, 0.0);
-        for &l in self.labels {
-            let (a, b) = (out.map(|v| v == l), self.gt.map(|v| v == l));
-            sk += dice_on(&a, &b, self.axis, &skipped);
-            vol += dice_on(&a, &b, self.axis, &all);
-        }
-        let k = self.labels.len().max(1) as f64;
-        Ok((sk / k, vol / k))
+        let (a, b) = (out.map(|v| v == s.label), s.gt.map(|v| v == s.label));
+        Ok((
+            dice_on(&a, &b, self.axis, &skipped),
+            dice_on(&a, &b, self.axis, &all),
+        ))
     }
 
-    /// Every strategy at every budget.
+    /// Every strategy at every budget, for every label.
     pub fn run(
         &self,
         strategies: &[Strategy],
         budgets: &[usize],
     ) -> Result<Vec<StrategyRow>, ProjectError> {
-        let most = budgets.iter().copied().max().unwrap_or(0);
-        let advised = if strategies.contains(&Strategy::Advised) {
-            self.advised_order(most)?
-        } else {
-            Vec::new()
-        };
         let mut rows = Vec::new();
-        for &strategy in strategies {
-            for &budget in budgets {
-                let traced = match strategy {
-                    Strategy::Uniform => uniform_slices(self.first, self.last, budget),
-                    Strategy::Advised => {
-                        let mut t = vec![self.first, self.last];
-                        t.extend(advised.iter().take(budget));
-                        t.sort_unstable();
-                        t.dedup();
-                        t
-                    }
-                };
-                let (dice_skipped, dice_volume) = self.score(&traced)?;
-                rows.push(StrategyRow {
-                    strategy,
-                    budget,
-                    traced,
-                    dice_skipped,
-                    dice_volume,
-                });
+        for s in self.labels.iter().filter_map(|&l| self.structure(l)) {
+            for &strategy in strategies {
+                for &budget in budgets {
+                    let traced = match strategy {
+                        Strategy::Uniform => uniform_slices(s.first, s.last, budget),
+                        Strategy::Advised => self.advised(&s, budget)?,
+                    };
+                    let (dice_skipped, dice_volume) = self.score(&s, &traced)?;
+                    rows.push(StrategyRow {
+                        strategy,
+                        label: s.label,
+                        budget,
+                        traced,
+                        dice_skipped,
+                        dice_volume,
+                    });
+                }
             }
         }
         Ok(rows)
@@ -179,46 +200,74 @@ impl Simulation<'_> {
 
 /// Write `strategy.csv` and `strategy.md` (a table by budget) into `out`.
 pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
-    let mut csv = String::from("strategy,budget,traced_slices,dice_skipped,dice_volume,traced\n");
+    let mut csv =
+        String::from("strategy,budget,traced_slices,dice_skipped,dice_volume,traced,label\n");
     for r in rows {
         let traced: Vec<String> = r.traced.iter().map(usize::to_string).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{:.6},{:.6},{}",
+            "{},{},{},{:.6},{:.6},{},{}",
             r.strategy.name(),
             r.budget,
             r.traced.len(),
             r.dice_skipped,
             r.dice_volume,
-            traced.join(" ")
+            traced.join(" "),
+            r.label
         );
     }
     write_text(&out.join("strategy.csv"), &csv)?;
     let mut budgets: Vec<usize> = rows.iter().map(|r| r.budget).collect();
     budgets.sort_unstable();
     budgets.dedup();
-    let find = |s: Strategy, b: usize| rows.iter().find(|r| r.strategy == s && r.budget == b);
+    let mean = |s: Strategy, b: usize, label: Option<u16>, f: fn(&StrategyRow) -> f64| {
+        let v: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.strategy == s && r.budget == b && label.is_none_or(|l| l == r.label))
+            .map(f)
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let cell = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{x:.4}"));
     let mut md = String::from(
         "# Which slices to trace: uniform against advised\n\n\
-         The outermost slices and `budget` more are traced; Dice of the interpolation \
-         (mean over the labels) on the skipped slices and on the whole volume.\n\n\
+         Each structure is traced on its own: its outermost slices and `budget` more. \
+         Dice of the interpolation on the structure's skipped slices and on the whole \
+         volume, the mean over the labels.\n\n\
          | budget | traced | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
          |---:|---:|---:|---:|---:|---:|\n",
     );
-    let cell = |r: Option<&StrategyRow>, f: fn(&StrategyRow) -> f64| {
-        r.map_or("—".to_string(), |r| format!("{:.4}", f(r)))
-    };
-    for b in budgets {
-        let (u, a) = (find(Strategy::Uniform, b), find(Strategy::Advised, b));
-        let traced = u.or(a).map_or(0, |r| r.traced.len());
+    let (u, a) = (Strategy::Uniform, Strategy::Advised);
+    for &b in &budgets {
+        let traced = rows
+            .iter()
+            .find(|r| r.budget == b)
+            .map_or(0, |r| r.traced.len());
         let _ = writeln!(
             md,
             "| {b} | {traced} | {} | {} | {} | {} |",
-            cell(u, |r| r.dice_skipped),
-            cell(a, |r| r.dice_skipped),
-            cell(u, |r| r.dice_volume),
-            cell(a, |r| r.dice_volume),
+            cell(mean(u, b, None, |r| r.dice_skipped)),
+            cell(mean(a, b, None, |r| r.dice_skipped)),
+            cell(mean(u, b, None, |r| r.dice_volume)),
+            cell(mean(a, b, None, |r| r.dice_volume)),
         );
+    }
+    let mut labels: Vec<u16> = rows.iter().map(|r| r.label).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    md.push_str(
+        "\nPer label, Dice on the skipped slices:\n\n\
+         | budget | label | uniform | advised |\n|---:|---:|---:|---:|\n",
+    );
+    for &b in &budgets {
+        for &l in &labels {
+            let _ = writeln!(
+                md,
+                "| {b} | {l} | {} | {} |",
+                cell(mean(u, b, Some(l), |r| r.dice_skipped)),
+                cell(mean(a, b, Some(l), |r| r.dice_skipped)),
+            );
+        }
     }
     write_text(&out.join("strategy.md"), &md)
 }
