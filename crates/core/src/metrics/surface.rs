@@ -27,14 +27,18 @@ use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
 
 /// Positions of a slab that one task of the z pass owns.
-const Z_RUN: usize = 2048;
+const Z_RUN: usize = 512;
 
 /// Columns gathered together (transposed) in the y pass.
 const BLOCK: usize = 16;
 
 /// The direct search of a slab gives up after visiting this many times the
-/// slab's voxels (far-apart borders); the envelope passes then take over.
-const SEARCH_BUDGET: usize = 4;
+/// slab's voxels (far-apart borders); the envelope passes then take over. A
+/// visited cell costs about a tenth of a voxel of the envelope passes.
+const SEARCH_BUDGET: usize = 8;
+
+/// What a row costs the direct search beyond its cells, in cells.
+const ROW_COST: usize = 8;
 
 /// Bit of a ground-truth border voxel in [`BorderFlags`].
 const GT_BIT: u8 = 1;
@@ -130,12 +134,13 @@ fn directed_with<Z: ZDist>(
     }
     let zd = z_pass::<Z>(flags, to);
     let [sx, sy, sz] = spacing;
-    // (sz · slices)² for every count a column can hold.
+    // (sz · slices)² for every count a column can hold, then +∞ for `NONE`.
     let heights: Vec<f64> = (0..cz)
         .map(|z| {
             let d = z as f64 * sz;
             d * d
         })
+        .chain([f64::INFINITY])
         .collect();
     let per_slab: Vec<Vec<f64>> = flags
         .bits
@@ -155,6 +160,7 @@ fn directed_with<Z: ZDist>(
                     heights: &heights,
                     sx2: sx * sx,
                     sy2: sy * sy,
+                    inv_sx2: 1.0 / (sx * sx),
                 };
                 sc.search(&slab, budget.saturating_mul(plane))
                     .unwrap_or_else(|| sc.envelopes(&slab))
@@ -173,10 +179,12 @@ struct Slab<'a, Z> {
     zs: &'a [Z],
     cx: usize,
     cy: usize,
-    /// `(sz · count)²` by count.
+    /// `(sz · count)²` by count, and a last entry `+∞` that stands for `NONE`.
     heights: &'a [f64],
     sx2: f64,
     sy2: f64,
+    /// `1 / sx2`, for the search's window widths (which have a step to spare).
+    inv_sx2: f64,
 }
 
 impl<Z: ZDist> Slab<'_, Z> {
@@ -200,7 +208,10 @@ impl<Z: ZDist> Slab<'_, Z> {
             {
                 let z = self.zs[j * self.cx + px];
                 if z != Z::NONE {
-                    best = best.min(fy + self.heights[z.index()]);
+                    let v = fy + self.heights[z.index()];
+                    if v < best {
+                        best = v;
+                    }
                 }
             }
         }
@@ -220,33 +231,32 @@ impl<Z: ZDist> Slab<'_, Z> {
     }
 
     /// The least `sx²·Δi² + (fy + heights[count])` of row `j` into `best`,
-    /// outward from `px` while `sx²·Δi² + fy` stays below `best`. Returns the
+    /// over the cells whose `sx²·Δi² + fy` can be below `best` (one more on
+    /// each side than the square root says, against rounding). Returns the
     /// number of cells visited.
     #[inline]
     fn scan_row(&self, j: usize, px: usize, fy: f64, best: &mut f64) -> usize {
-        let row = &self.zs[j * self.cx..(j + 1) * self.cx];
-        let mut visit = |di: usize, z: Z| -> bool {
-            let fx = self.sx2 * di as f64 * di as f64;
-            if fx + fy >= *best {
-                return false;
-            }
-            if z != Z::NONE {
-                *best = best.min(fx + (fy + self.heights[z.index()]));
-            }
-            true
-        };
-        let right = row[px..]
+        // At most `cx` steps; `as` saturates an infinite bound.
+        let w = (((*best - fy) * self.inv_sx2).sqrt() as usize).min(self.cx) + 1;
+        let lo = px.saturating_sub(w);
+        let hi = (px + w + 1).min(self.cx);
+        let row = &self.zs[j * self.cx + lo..j * self.cx + hi];
+        let last = self.heights.len() - 1;
+        let pf = px as f64;
+        // Branch-free, so the compiler vectorises it: `NONE` maps to the
+        // infinite last entry of `heights`.
+        let m = row
             .iter()
-            .enumerate()
-            .take_while(|&(di, &z)| visit(di, z))
-            .count();
-        let left = row[..px]
-            .iter()
-            .rev()
-            .enumerate()
-            .take_while(|&(di, &z)| visit(di + 1, z))
-            .count();
-        right + left + 1
+            .zip(lo..)
+            .map(|(&z, i)| {
+                let d = i as f64 - pf;
+                self.sx2 * d * d + (fy + self.heights[z.index().min(last)])
+            })
+            .fold(f64::INFINITY, |m, v| if v < m { v } else { m });
+        if m < *best {
+            *best = m;
+        }
+        hi - lo + ROW_COST
     }
 }
 
@@ -326,6 +336,7 @@ impl SlabScratch {
             heights,
             sx2,
             sy2,
+            ..
         } = *slab;
         let none = Z::NONE.index() as u32;
         let mut i0 = 0;
@@ -418,13 +429,57 @@ struct Directed {
     within: usize,
 }
 
+/// Distances summed per chunk of this many, then the chunks in order: the same
+/// distances give the same sums whatever the threads do.
+const SUM_CHUNK: usize = 1 << 14;
+
+/// A compensated (Neumaier) running sum: millions of distances add up to
+/// their sum correctly rounded in all but rare cases, in a fixed order.
+#[derive(Clone, Copy, Default)]
+struct Sum {
+    s: f64,
+    c: f64,
+}
+
+impl Sum {
+    #[inline]
+    fn add(self, x: f64) -> Sum {
+        let t = self.s + x;
+        let c = if self.s.abs() >= x.abs() {
+            (self.s - t) + x
+        } else {
+            (x - t) + self.s
+        };
+        Sum {
+            s: t,
+            c: self.c + c,
+        }
+    }
+
+    fn total(self) -> f64 {
+        self.s + self.c
+    }
+}
+
 fn summarise(d: &mut [f64], tol: f64) -> Directed {
     let n = d.len();
-    let sum: f64 = d.par_iter().sum();
-    let max = d.par_iter().copied().reduce_with(f64::max);
     // Distances equal to the tolerance up to rounding count as within it.
     let limit = tol * (1.0 + 1e-12);
-    let within = d.par_iter().filter(|&&x| x <= limit).count();
+    let parts: Vec<(Sum, f64, usize)> = d
+        .par_chunks(SUM_CHUNK)
+        .map(|c| {
+            c.iter()
+                .fold((Sum::default(), f64::NEG_INFINITY, 0), |(s, m, w), &x| {
+                    (s.add(x), m.max(x), w + usize::from(x <= limit))
+                })
+        })
+        .collect();
+    let sum = parts
+        .iter()
+        .fold(Sum::default(), |a, p| a.add(p.0.s).add(p.0.c))
+        .total();
+    let max = (n > 0).then(|| parts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
+    let within = parts.iter().map(|p| p.2).sum();
     Directed {
         n,
         max,
@@ -459,8 +514,8 @@ pub(super) fn add_distances<G: MaskView, S: MaskView>(
         // One border set is empty: every distance is undefined.
         return;
     }
-    let a = summarise(&mut gs, m.tolerance);
-    let b = summarise(&mut sg, m.tolerance);
+    let tol = m.tolerance;
+    let (a, b) = rayon::join(|| summarise(&mut gs, tol), || summarise(&mut sg, tol));
     let n = (a.n + b.n) as f64;
     m.hd_gt_to_seg = a.max;
     m.hd_seg_to_gt = b.max;
