@@ -2,24 +2,26 @@
 //!
 //! For every border voxel of mask A we need the distance to the nearest border
 //! voxel of mask B. That is the Euclidean distance transform of B's border set,
-//! sampled at A's border voxels. Four facts keep this cheap:
+//! sampled at A's border voxels only. Four facts keep this cheap:
 //!
-//! * Both border sets lie in the bounding box of both masks, so the transform is
-//!   computed on that box only; the crop is exact, because every candidate
-//!   nearest voxel is inside it.
+//! * Both border sets lie in the bounding box of both masks, so all work is done
+//!   on that box; the crop is exact, because every candidate nearest voxel is
+//!   inside it.
 //! * The border voxels of both masks are found once, in one parallel pass that
 //!   stores two bits a voxel; both directions then read those bits.
-//! * The transform is separable (Felzenszwalb–Huttenlocher, see [`crate::edt`]).
-//!   The z pass runs first on integer slice counts (2 bytes a voxel) and writes
-//!   them transposed, y fastest, so that every later read runs along contiguous
-//!   memory. Then, slab by slab in parallel, the y pass builds the lower envelope
-//!   of every column straight from those counts (skipping the columns' empty
-//!   stretches) but evaluates it only on the rows that hold border voxels of A,
-//!   and the x pass runs only on those rows and is evaluated only at those voxels.
-//!   No full-size floating-point array is ever allocated.
-//! * The x pass of a row whose border voxels are all close to B does not build an
-//!   envelope: the distance along y and z at the voxel itself bounds how far
-//!   along x a nearer voxel can be, and that short window is searched directly.
+//! * The transform is separable: a z pass counts, in every column, the slices to
+//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps). The
+//!   squared distance from a voxel to B is then the least
+//!   `sx²·Δi² + sy²·Δj² + (sz·count)²` over its slab.
+//! * Borders being compared are usually close, so that least value is searched
+//!   for directly around each border voxel of A, outward, skipping every cell
+//!   that cannot beat the best so far: a few dozen cells a voxel. A slab whose
+//!   searches grow too long (far-apart borders) runs the last two passes of the
+//!   separable transform instead (Felzenszwalb–Huttenlocher, [`crate::edt`]):
+//!   envelopes along y evaluated only on the rows that hold border voxels of A,
+//!   then along those rows evaluated only at those voxels. Both ways compute the
+//!   same sums in the same order, and no full-size floating-point array is ever
+//!   allocated.
 use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
 use super::stats::percentile;
