@@ -1,6 +1,7 @@
 //! Benchmarks of the metrics: overlap counts on a 512³ pair beside the raw
 //! one-pass read of both arrays (the floor any overlap metric can reach), the
-//! full metrics (HD95, ASSD, ...) on a 256³ pair, and the exact EDT on 256³.
+//! full metrics (HD95, ASSD, ...) on a 256³ and a 512³ pair, and the exact EDT
+//! on 256³.
 //! Run with `cargo bench -p interslice-core --bench metrics`.
 use criterion::{Criterion, criterion_group, criterion_main};
 use interslice_core::edt::{squared_edt_3d, squared_edt_3d_f32};
@@ -133,6 +134,16 @@ fn distances_256(c: &mut Criterion) {
     g.finish();
 }
 
+fn distances_512(c: &mut Criterion) {
+    let (gt, seg) = blob_pair(512, 512);
+    let mut g = c.benchmark_group("metrics_512");
+    g.sample_size(10).measurement_time(Duration::from_secs(20));
+    g.bench_function("evaluate_label_all_metrics", |b| {
+        b.iter(|| evaluate_label(black_box(&gt), black_box(&seg), 1, 1.0).unwrap())
+    });
+    g.finish();
+}
+
 fn edt_256(c: &mut Criterion) {
     let (gt, _) = blob_pair(256, 256);
     let features: Vec<bool> = gt.data().par_iter().map(|&x| x == 0).collect();
@@ -147,5 +158,5 @@ fn edt_256(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, overlap_512, distances_256, edt_256);
+criterion_group!(benches, overlap_512, distances_256, distances_512, edt_256);
 criterion_main!(benches);

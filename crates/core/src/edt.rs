@@ -354,18 +354,38 @@ impl LowerEnvelope {
     /// Build the envelope of line `f` (squared distances so far; infinite values
     /// are ignored) for sample spacing² `s2`.
     pub fn build(&mut self, f: &[f64], s2: f64) {
-        if self.parabolas.len() < f.len() {
-            self.parabolas.resize(f.len(), Parabola::default());
+        self.build_from(
+            f.len(),
+            s2,
+            f.iter()
+                .enumerate()
+                .filter(|(_, h)| h.is_finite())
+                .map(|(q, &h)| (q, h)),
+        );
+    }
+
+    /// Build the envelope of a line of `line_len` samples from its finite
+    /// samples only, given as `(position, height)` with strictly ascending
+    /// positions below `line_len`: callers whose lines are mostly empty, or
+    /// stored in another type, feed them without a floating-point copy.
+    pub fn build_from(
+        &mut self,
+        line_len: usize,
+        s2: f64,
+        samples: impl IntoIterator<Item = (usize, f64)>,
+    ) {
+        if self.parabolas.len() < line_len {
+            self.parabolas.resize(line_len, Parabola::default());
         }
         self.s2 = s2;
-        self.line_len = f.len();
+        self.line_len = line_len;
         let two_s2 = 2.0 * s2;
-        let env = &mut self.parabolas[..];
+        let env = &mut self.parabolas[..line_len];
         let mut len = 0usize;
-        for (q, &h) in f.iter().enumerate() {
-            if !h.is_finite() {
-                continue;
-            }
+        // The last parabola on the envelope, kept in registers (`env[len - 1]`).
+        let mut top = Parabola::default();
+        for (q, h) in samples {
+            debug_assert!(h.is_finite());
             let q = q as f64;
             let a = h + s2 * q * q;
             // Pop the parabolas that q hides: the breakpoint of q with the last
@@ -375,16 +395,17 @@ impl LowerEnvelope {
                 if len == 0 {
                     break (-1.0, 0.0);
                 }
-                let last = env[len - 1];
-                let num = a - last.a;
-                let den = two_s2 * (q - last.q);
-                if len > 1 && num * last.den <= last.num * den {
+                let num = a - top.a;
+                let den = two_s2 * (q - top.q);
+                if len > 1 && num * top.den <= top.num * den {
                     len -= 1;
+                    top = env[len - 1];
                 } else {
                     break (num, den);
                 }
             };
-            env[len] = Parabola { q, h, a, num, den };
+            top = Parabola { q, h, a, num, den };
+            env[len] = top;
             len += 1;
         }
         self.len = len;

@@ -10,6 +10,13 @@ pub trait MaskView: Sync {
     fn dims(&self) -> [usize; 3];
     /// True when the voxel at linear index `idx` is foreground.
     fn fg(&self, idx: usize) -> bool;
+    /// `out[n] = self.fg(start + n)` for every `n`: the views implement it as
+    /// one loop over a slice, which the compiler vectorises.
+    fn fg_run(&self, start: usize, out: &mut [bool]) {
+        for (o, idx) in out.iter_mut().zip(start..) {
+            *o = self.fg(idx);
+        }
+    }
 }
 
 /// The voxels of `data` equal to `value`.
@@ -32,6 +39,13 @@ impl<T: Copy + PartialEq + Sync> MaskView for EqualTo<'_, T> {
     fn fg(&self, idx: usize) -> bool {
         self.data[idx] == self.value
     }
+    #[inline]
+    fn fg_run(&self, start: usize, out: &mut [bool]) {
+        let data = &self.data[start..start + out.len()];
+        for (o, v) in out.iter_mut().zip(data) {
+            *o = *v == self.value;
+        }
+    }
 }
 
 /// The voxels of `data` that are not zero (any label): the union of all labels.
@@ -51,6 +65,14 @@ impl<T: Copy + PartialEq + Default + Sync> MaskView for NonZero<'_, T> {
     #[inline]
     fn fg(&self, idx: usize) -> bool {
         self.data[idx] != T::default()
+    }
+    #[inline]
+    fn fg_run(&self, start: usize, out: &mut [bool]) {
+        let data = &self.data[start..start + out.len()];
+        let zero = T::default();
+        for (o, v) in out.iter_mut().zip(data) {
+            *o = *v != zero;
+        }
     }
 }
 
@@ -78,32 +100,57 @@ pub fn is_border<M: MaskView>(m: &M, i: usize, j: usize, k: usize) -> bool {
         || !m.fg(idx + sz)
 }
 
-/// Sets `bit` in `out[x - x0]` for every border voxel `(x, y, z)` of `m` with
-/// `x` in `x0..x0 + out.len()`: [`is_border`] for a run of one row, with the
-/// tests that depend only on the row hoisted out of the loop.
+/// Voxels of a row handled together by [`mark_border_row`] and [`bounding_box`].
+const RUN: usize = 64;
+
+/// True when any of `v` is set (a branch-free fold, vectorised).
 #[inline]
+fn any(v: &[bool]) -> bool {
+    v.iter().fold(false, |a, &b| a | b)
+}
+
+/// Sets `bit` in `out[x - x0]` for every border voxel `(x, y, z)` of `m` with
+/// `x` in `x0..x0 + out.len()`: [`is_border`] for a run of one row, computed
+/// [`RUN`] voxels at a time from whole runs of the row and of its four
+/// neighbour rows (runs without foreground are skipped after one read).
 pub fn mark_border_row<M: MaskView>(m: &M, y: usize, z: usize, x0: usize, out: &mut [u8], bit: u8) {
     let [nx, ny, nz] = m.dims();
     let sy = nx;
     let sz = nx * ny;
     let base = sy * y + sz * z;
+    // A voxel on a face of the image always has a neighbour outside it.
     let edge = y == 0 || z == 0 || y + 1 == ny || z + 1 == nz;
-    for (o, x) in out.iter_mut().zip(x0..) {
-        let idx = base + x;
-        if !m.fg(idx) {
+    let mut c = [false; RUN + 2];
+    let mut inner = [false; RUN];
+    let mut nb = [false; RUN];
+    for (n, o) in out.chunks_mut(RUN).enumerate() {
+        let a = x0 + n * RUN;
+        let len = o.len();
+        // The run with one voxel either side; outside the image is background.
+        m.fg_run(base + a, &mut c[1..=len]);
+        if !any(&c[1..=len]) {
             continue;
         }
-        let border = edge
-            || x == 0
-            || x + 1 == nx
-            || !m.fg(idx - 1)
-            || !m.fg(idx + 1)
-            || !m.fg(idx - sy)
-            || !m.fg(idx + sy)
-            || !m.fg(idx - sz)
-            || !m.fg(idx + sz);
-        if border {
-            *o |= bit;
+        c[0] = a > 0 && m.fg(base + a - 1);
+        c[len + 1] = a + len < nx && m.fg(base + a + len);
+        if edge {
+            for (o, &f) in o.iter_mut().zip(&c[1..=len]) {
+                *o |= bit * u8::from(f);
+            }
+            continue;
+        }
+        let inner = &mut inner[..len];
+        let nb = &mut nb[..len];
+        m.fg_run(base + a - sy, inner);
+        for off in [base + a + sy, base + a - sz, base + a + sz] {
+            m.fg_run(off, nb);
+            for (i, &b) in inner.iter_mut().zip(nb.iter()) {
+                *i &= b;
+            }
+        }
+        for (x, (o, &i)) in o.iter_mut().zip(inner.iter()).enumerate() {
+            let border = c[x + 1] && !(c[x] && c[x + 2] && i);
+            *o |= bit * u8::from(border);
         }
     }
 }
@@ -139,22 +186,29 @@ pub fn bounding_box<M: MaskView>(m: &M) -> Option<BoundingBox> {
     let [nx, ny, nz] = m.dims();
     (0..nz)
         .into_par_iter()
-        .filter_map(|k| {
-            let mut bb: Option<BoundingBox> = None;
-            for j in 0..ny {
-                let base = nx * (j + ny * k);
-                let Some(first) = (0..nx).find(|&i| m.fg(base + i)) else {
-                    continue;
-                };
-                let last = (first..nx).rev().find(|&i| m.fg(base + i)).unwrap_or(first);
-                let row = BoundingBox {
-                    lo: [first, j, k],
-                    hi: [last + 1, j + 1, k + 1],
-                };
-                bb = Some(bb.map_or(row, |b| b.union(row)));
-            }
-            bb
-        })
+        .map_init(
+            || vec![false; nx],
+            |row, k| {
+                let mut bb: Option<BoundingBox> = None;
+                for j in 0..ny {
+                    let base = nx * (j + ny * k);
+                    m.fg_run(base, row);
+                    // Whole runs first: most rows of a box are empty or full.
+                    let Some(c) = row.chunks(RUN).position(any) else {
+                        continue;
+                    };
+                    let first = c * RUN + row[c * RUN..].iter().position(|&f| f).unwrap_or(0);
+                    let last = row.iter().rposition(|&f| f).unwrap_or(first);
+                    let r = BoundingBox {
+                        lo: [first, j, k],
+                        hi: [last + 1, j + 1, k + 1],
+                    };
+                    bb = Some(bb.map_or(r, |b| b.union(r)));
+                }
+                bb
+            },
+        )
+        .flatten()
         .reduce_with(BoundingBox::union)
 }
 
@@ -221,6 +275,42 @@ mod tests {
                 }
             }
         }
+        // Rows longer than a run: every row segment, against the voxel test,
+        // and the bounding box against a naive one.
+        let pattern: Vec<u16> = (0..150 * 20)
+            .map(|n: usize| u16::from((n * 7919 + n / 150) % 7 < 4 && (n % 150) > 20))
+            .collect();
+        let m = EqualTo {
+            data: &pattern,
+            dims: [150, 4, 5],
+            value: 1,
+        };
+        for z in 0..5 {
+            for y in 0..4 {
+                for x0 in [0, 1, 37, 64] {
+                    let mut row = vec![0u8; 150 - x0];
+                    mark_border_row(&m, y, z, x0, &mut row, 4);
+                    for (x, r) in (x0..150).zip(&row) {
+                        assert_eq!(*r == 4, is_border(&m, x, y, z), "{x},{y},{z}");
+                    }
+                }
+            }
+        }
+        let fg: Vec<usize> = (0..pattern.len()).filter(|&n| pattern[n] == 1).collect();
+        let lo = [0, 1, 2].map(|a| {
+            fg.iter()
+                .map(|&n| [n % 150, (n / 150) % 4, n / 600][a])
+                .min()
+                .unwrap()
+        });
+        let hi = [0, 1, 2].map(|a| {
+            fg.iter()
+                .map(|&n| [n % 150, (n / 150) % 4, n / 600][a])
+                .max()
+                .unwrap()
+                + 1
+        });
+        assert_eq!(bounding_box(&m), Some(BoundingBox { lo, hi }));
         let empty = vec![0u8; 125];
         assert_eq!(
             bounding_box(&EqualTo {

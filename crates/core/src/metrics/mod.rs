@@ -26,7 +26,6 @@ pub mod surface;
 
 pub use border::{BoundingBox, EqualTo, MaskView, NonZero};
 pub use overlap::{Confusion, LabelHistograms, confusion_of, confusion_where};
-pub use surface::SurfaceDistances;
 
 /// The default NSD tolerance: 1.0 physical unit.
 pub const DEFAULT_TOLERANCE: f64 = 1.0;
@@ -95,8 +94,9 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// Assemble the metrics from the confusion matrix and the surface distances.
-    pub fn new(c: Confusion, s: SurfaceDistances, geometry: &Geometry, tolerance: f64) -> Metrics {
+    /// The metrics of the confusion matrix `c`, with no border voxels and every
+    /// distance `None` until [`surface::add_distances`] fills them in.
+    fn from_confusion(c: Confusion, geometry: &Geometry, tolerance: f64) -> Metrics {
         let vox = geometry.voxel_volume();
         Metrics {
             tp: c.tp,
@@ -111,22 +111,22 @@ impl Metrics {
             volume_similarity: c.volume_similarity(),
             volume_gt: c.gt_voxels() as f64 * vox,
             volume_seg: c.seg_voxels() as f64 * vox,
-            hd: s.hd,
-            hd95: s.hd95,
-            hd95_pooled: s.hd95_pooled,
-            assd: s.assd,
-            masd: s.masd,
-            nsd: s.nsd,
+            hd: None,
+            hd95: None,
+            hd95_pooled: None,
+            assd: None,
+            masd: None,
+            nsd: None,
             tolerance,
             unit: geometry.unit.symbol().to_string(),
-            border_gt: s.border_gt,
-            border_seg: s.border_seg,
-            hd_gt_to_seg: s.hd_gt_to_seg,
-            hd_seg_to_gt: s.hd_seg_to_gt,
-            hd95_gt_to_seg: s.hd95_gt_to_seg,
-            hd95_seg_to_gt: s.hd95_seg_to_gt,
-            mean_gt_to_seg: s.mean_gt_to_seg,
-            mean_seg_to_gt: s.mean_seg_to_gt,
+            border_gt: 0,
+            border_seg: 0,
+            hd_gt_to_seg: None,
+            hd_seg_to_gt: None,
+            hd95_gt_to_seg: None,
+            hd95_seg_to_gt: None,
+            mean_gt_to_seg: None,
+            mean_seg_to_gt: None,
         }
     }
 
@@ -338,8 +338,9 @@ fn evaluate_mask_views<G: MaskView, S: MaskView>(
             a.zip(b).map(|(a, b)| a.union(b))
         }
     };
-    let sd = surface::surface_distances(g, s, bb, geometry.spacing, tolerance);
-    Metrics::new(c, sd, geometry, tolerance)
+    let mut m = Metrics::from_confusion(c, geometry, tolerance);
+    surface::add_distances(&mut m, g, s, bb, geometry.spacing);
+    m
 }
 
 #[cfg(test)]

@@ -2,70 +2,54 @@
 //!
 //! For every border voxel of mask A we need the distance to the nearest border
 //! voxel of mask B. That is the Euclidean distance transform of B's border set,
-//! sampled at A's border voxels. Three facts keep this cheap:
+//! sampled at A's border voxels only. Four facts keep this cheap:
 //!
-//! * Both border sets lie in the bounding box of both masks, so the transform is
-//!   computed on that box only; the crop is exact, because every candidate
-//!   nearest voxel is inside it.
+//! * Both border sets lie in the bounding box of both masks, so all work is done
+//!   on that box; the crop is exact, because every candidate nearest voxel is
+//!   inside it.
 //! * The border voxels of both masks are found once, in one parallel pass that
 //!   stores two bits a voxel; both directions then read those bits.
-//! * The transform is separable (Felzenszwalb–Huttenlocher, see [`crate::edt`]).
-//!   The z pass runs first, in parallel over y rows, on integer slice counts
-//!   (2 bytes a voxel). Then, slab by slab in parallel, the y pass builds the
-//!   lower envelope of every column but evaluates it only on the rows that hold
-//!   border voxels of A, and the x pass runs only on those rows and is evaluated
-//!   only at those voxels. No full-size floating-point array is ever allocated.
+//! * The transform is separable: a z pass counts, in every column, the slices to
+//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps). The
+//!   squared distance from a voxel to B is then the least
+//!   `sx²·Δi² + sy²·Δj² + (sz·count)²` over its slab.
+//! * Borders being compared are usually close, so that least value is searched
+//!   for directly around each border voxel of A, outward, skipping every cell
+//!   that cannot beat the best so far: a few dozen cells a voxel. A slab whose
+//!   searches grow too long (far-apart borders) runs the last two passes of the
+//!   separable transform instead (Felzenszwalb–Huttenlocher, [`crate::edt`]):
+//!   envelopes along y evaluated only on the rows that hold border voxels of A,
+//!   then along those rows evaluated only at those voxels. Both ways compute the
+//!   same sums in the same order, and no full-size floating-point array is ever
+//!   allocated.
+use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
 use super::stats::percentile;
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-/// Columns gathered together in the strided y pass.
-const BLOCK: usize = 32;
+/// Positions of a slab that one task of the z pass owns.
+const Z_RUN: usize = 512;
+
+/// Columns gathered together (transposed) in the y pass.
+const BLOCK: usize = 16;
+
+/// The direct search of a slab gives up after visiting this many times the
+/// slab's voxels (far-apart borders); the envelope passes then take over. A
+/// visited cell costs about a tenth of a voxel of the envelope passes.
+const SEARCH_BUDGET: usize = 8;
+
+/// What a row costs the direct search beyond its cells, in cells.
+const ROW_COST: usize = 8;
 
 /// Bit of a ground-truth border voxel in [`BorderFlags`].
 const GT_BIT: u8 = 1;
 /// Bit of a segmentation border voxel in [`BorderFlags`].
 const SEG_BIT: u8 = 2;
 
-/// Distance statistics between the border voxels of a ground truth and a
-/// segmentation, in physical units. `None` when either border set is empty.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-pub struct SurfaceDistances {
-    /// Border voxels of the ground truth.
-    pub border_gt: u64,
-    /// Border voxels of the segmentation.
-    pub border_seg: u64,
-    /// Hausdorff distance: the largest distance in either direction.
-    pub hd: Option<f64>,
-    /// The larger of the two directed 95th percentiles.
-    pub hd95: Option<f64>,
-    /// The 95th percentile of both directions' distances pooled.
-    pub hd95_pooled: Option<f64>,
-    /// Average symmetric surface distance: the mean of both directions pooled.
-    pub assd: Option<f64>,
-    /// Mean of the two directed means.
-    pub masd: Option<f64>,
-    /// Normalised surface distance (surface Dice): share of border voxels of both
-    /// masks within the tolerance of the other border.
-    pub nsd: Option<f64>,
-    /// Largest distance from a ground-truth border voxel to the segmentation's border.
-    pub hd_gt_to_seg: Option<f64>,
-    /// Largest distance from a segmentation border voxel to the ground truth's border.
-    pub hd_seg_to_gt: Option<f64>,
-    /// 95th percentile of the ground truth → segmentation distances.
-    pub hd95_gt_to_seg: Option<f64>,
-    /// 95th percentile of the segmentation → ground truth distances.
-    pub hd95_seg_to_gt: Option<f64>,
-    /// Mean ground truth → segmentation distance.
-    pub mean_gt_to_seg: Option<f64>,
-    /// Mean segmentation → ground truth distance.
-    pub mean_seg_to_gt: Option<f64>,
-}
-
 /// The border voxels of two masks inside a box: per voxel (x-fastest, box
 /// coordinates) bit [`GT_BIT`] for the first mask and [`SEG_BIT`] for the second.
+#[derive(Debug, Clone)]
 struct BorderFlags {
     dims: [usize; 3],
     bits: Vec<u8>,
@@ -100,8 +84,9 @@ impl BorderFlags {
 trait ZDist: Copy + Send + Sync + Ord {
     const NONE: Self;
     const ZERO: Self;
+    /// One slice further; `NONE` stays `NONE`.
     fn succ(self) -> Self;
-    fn to_f64(self) -> f64;
+    fn index(self) -> usize;
 }
 
 macro_rules! zdist {
@@ -111,11 +96,12 @@ macro_rules! zdist {
             const ZERO: Self = 0;
             #[inline]
             fn succ(self) -> Self {
-                if self == Self::NONE { self } else { self + 1 }
+                // NONE is MAX, and real counts stay below MAX - 1.
+                self.saturating_add(1)
             }
             #[inline]
-            fn to_f64(self) -> f64 {
-                f64::from(self)
+            fn index(self) -> usize {
+                self as usize
             }
         }
     };
@@ -123,84 +109,169 @@ macro_rules! zdist {
 zdist!(u16);
 zdist!(u32);
 
-/// Distances (physical units) from every border voxel of `a` to the nearest
-/// border voxel of `b`, in no particular order. `bb` must hold the border voxels
-/// of both masks. Every value is `+∞` when `b` has no border voxel.
-pub fn directed_distances<A: MaskView, B: MaskView>(
-    a: &A,
-    b: &B,
-    bb: BoundingBox,
-    spacing: [f64; 3],
-) -> Vec<f64> {
-    let flags = BorderFlags::new(a, b, bb);
-    directed(&flags, GT_BIT, SEG_BIT, spacing)
-}
-
-/// Distances from the voxels flagged `from` to the nearest voxel flagged `to`.
+/// Distances from the voxels flagged `from` to the nearest voxel flagged `to`,
+/// slab by slab, row by row, ascending x. Every value is `+∞` when no voxel is
+/// flagged `to`.
 fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
     if flags.dims[2] < u16::MAX as usize - 1 {
-        directed_with::<u16>(flags, from, to, spacing)
+        directed_with::<u16>(flags, from, to, spacing, SEARCH_BUDGET)
     } else {
-        directed_with::<u32>(flags, from, to, spacing)
+        directed_with::<u32>(flags, from, to, spacing, SEARCH_BUDGET)
     }
 }
 
-fn directed_with<Z: ZDist>(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+/// [`directed`] with slice counts of type `Z`; the direct search of a slab
+/// gives up after `budget` cells per voxel of the slab.
+fn directed_with<Z: ZDist>(
+    flags: &BorderFlags,
+    from: u8,
+    to: u8,
+    spacing: [f64; 3],
+    budget: usize,
+) -> Vec<f64> {
     let [cx, cy, cz] = flags.dims;
-    let slab = cx * cy;
-    if slab * cz == 0 {
+    let plane = cx * cy;
+    if plane * cz == 0 {
         return Vec::new();
     }
     let zd = z_pass::<Z>(flags, to);
     let [sx, sy, sz] = spacing;
-    let (sx2, sy2) = (sx * sx, sy * sy);
+    // (sz · slices)² for every count a column can hold, then +∞ for `NONE`.
+    let heights: Vec<f64> = (0..cz)
+        .map(|z| {
+            let d = z as f64 * sz;
+            d * d
+        })
+        .chain([f64::INFINITY])
+        .collect();
     let per_slab: Vec<Vec<f64>> = flags
         .bits
-        .par_chunks(slab)
-        .enumerate()
+        .par_chunks(plane)
+        .zip(zd.par_chunks(plane))
         .map_init(
             || SlabScratch::new(cx, cy),
-            |sc, (k, fs)| {
-                // Border voxels of A in this slab, row by row.
-                sc.queries.clear();
-                sc.rows.clear();
-                for (j, row) in fs.chunks(cx).enumerate() {
-                    let start = sc.queries.len();
-                    sc.queries.extend(
-                        row.iter()
-                            .enumerate()
-                            .filter(|(_, f)| **f & from != 0)
-                            .map(|(i, _)| i),
-                    );
-                    if sc.queries.len() > start {
-                        sc.rows.push((j, start, sc.queries.len()));
-                    }
-                }
+            |sc, (fs, zs)| {
+                sc.find_queries(fs, cx, from);
                 if sc.rows.is_empty() {
                     return Vec::new();
                 }
-                y_pass(&zd, k, [cx, cy, cz], sz, sy2, sc);
-                let mut out = Vec::with_capacity(sc.queries.len());
-                for &(j, s, e) in &sc.rows {
-                    sc.env.build(&sc.g[cx * j..cx * (j + 1)], sx2);
-                    sc.env
-                        .evaluate_sorted(sc.queries[s..e].iter().copied(), |_, d2| {
-                            out.push(d2.sqrt())
-                        });
-                }
-                out
+                let slab = Slab {
+                    zs,
+                    cx,
+                    cy,
+                    heights: &heights,
+                    sx2: sx * sx,
+                    sy2: sy * sy,
+                    inv_sx2: 1.0 / (sx * sx),
+                };
+                sc.search(&slab, budget.saturating_mul(plane))
+                    .unwrap_or_else(|| sc.envelopes(&slab))
             },
         )
         .collect();
     per_slab.concat()
 }
 
+/// One slab of the z pass's slice counts and what turns them into squared
+/// distances: a flagged voxel at `(i, j)` of count `c` is at
+/// `sx²·Δi² + (sy²·Δj² + heights[c])` from a voxel of the slab, the order of
+/// the sums of the separable transform (so both ways give the same values).
+struct Slab<'a, Z> {
+    /// Counts `[j][i]`, x fastest.
+    zs: &'a [Z],
+    cx: usize,
+    cy: usize,
+    /// `(sz · count)²` by count, and a last entry `+∞` that stands for `NONE`.
+    heights: &'a [f64],
+    sx2: f64,
+    sy2: f64,
+    /// `1 / sx2`, for the search's window widths (which have a step to spare).
+    inv_sx2: f64,
+}
+
+impl<Z: ZDist> Slab<'_, Z> {
+    /// The squared distance from voxel `(px, py)` to the nearest flagged voxel:
+    /// rows are visited outward from `py` and each row outward from `px`,
+    /// skipping every cell whose `sx²·Δi² + sy²·Δj²` alone reaches the best
+    /// value so far (rounding is monotone, so a skipped cell cannot be lower).
+    /// `None` once more than `budget` cells were visited.
+    fn nearest(&self, px: usize, py: usize, budget: &mut usize) -> Option<f64> {
+        let mut best = f64::INFINITY;
+        // A first bound from the voxel's own column, which the rows narrow.
+        for dj in 0..self.cy {
+            let fy = self.sy2 * dj as f64 * dj as f64;
+            if fy >= best || (dj > py && py + dj >= self.cy) {
+                break;
+            }
+            *budget = budget.checked_sub(1)?;
+            for j in [py.checked_sub(dj), Some(py + dj).filter(|&j| j < self.cy)]
+                .into_iter()
+                .flatten()
+            {
+                let z = self.zs[j * self.cx + px];
+                if z != Z::NONE {
+                    let v = fy + self.heights[z.index()];
+                    if v < best {
+                        best = v;
+                    }
+                }
+            }
+        }
+        for dj in 0..self.cy {
+            let fy = self.sy2 * dj as f64 * dj as f64;
+            if fy >= best || (dj > py && py + dj >= self.cy) {
+                break;
+            }
+            let below = py.checked_sub(dj);
+            let above = Some(py + dj).filter(|&j| j < self.cy && dj > 0);
+            for j in [below, above].into_iter().flatten() {
+                let visited = self.scan_row(j, px, fy, &mut best);
+                *budget = budget.checked_sub(visited)?;
+            }
+        }
+        Some(best)
+    }
+
+    /// The least `sx²·Δi² + (fy + heights[count])` of row `j` into `best`,
+    /// over the cells whose `sx²·Δi² + fy` can be below `best` (one more on
+    /// each side than the square root says, against rounding). Returns the
+    /// number of cells visited.
+    #[inline]
+    fn scan_row(&self, j: usize, px: usize, fy: f64, best: &mut f64) -> usize {
+        // At most `cx` steps; `as` saturates an infinite bound.
+        let w = (((*best - fy) * self.inv_sx2).sqrt() as usize).min(self.cx) + 1;
+        let lo = px.saturating_sub(w);
+        let hi = (px + w + 1).min(self.cx);
+        let row = &self.zs[j * self.cx + lo..j * self.cx + hi];
+        let last = self.heights.len() - 1;
+        let pf = px as f64;
+        // Branch-free, so the compiler vectorises it: `NONE` maps to the
+        // infinite last entry of `heights`.
+        let m = row
+            .iter()
+            .zip(lo..)
+            .map(|(&z, i)| {
+                let d = i as f64 - pf;
+                self.sx2 * d * d + (fy + self.heights[z.index().min(last)])
+            })
+            .fold(f64::INFINITY, |m, v| if v < m { v } else { m });
+        if m < *best {
+            *best = m;
+        }
+        hi - lo + ROW_COST
+    }
+}
+
 /// Per-thread buffers of the slab passes.
 struct SlabScratch {
+    /// x of every query voxel of the slab, row after row.
     queries: Vec<usize>,
+    /// Rows holding queries: `(j, start, end)` into `queries`.
     rows: Vec<(usize, usize, usize)>,
+    /// Squared y-z distances on the rows of `rows`: `g[r * cx + i]`.
     g: Vec<f64>,
-    buf: Vec<f64>,
+    /// [`BLOCK`] columns of slice counts, each contiguous (as `u32`).
+    cols: Vec<u32>,
     env: LowerEnvelope,
 }
 
@@ -210,85 +281,143 @@ impl SlabScratch {
             queries: Vec::new(),
             rows: Vec::new(),
             g: vec![0.0; cx * cy],
-            buf: vec![0.0; BLOCK * cy],
+            cols: vec![0; BLOCK * cy],
             env: LowerEnvelope::with_capacity(cx.max(cy)),
         }
     }
-}
 
-/// Squared distances within slab `k`, on the rows listed in `sc.rows` only:
-/// from the z distances `zd` (layout `[j][k][i]`) into `sc.g` (`[j][i]`), via
-/// the lower envelope of every column along y.
-fn y_pass<Z: ZDist>(
-    zd: &[Z],
-    k: usize,
-    [cx, cy, cz]: [usize; 3],
-    sz: f64,
-    sy2: f64,
-    sc: &mut SlabScratch,
-) {
-    let SlabScratch {
-        g, buf, env, rows, ..
-    } = sc;
-    let row_stride = cz * cx;
-    let mut i0 = 0;
-    while i0 < cx {
-        let w = BLOCK.min(cx - i0);
-        for j in 0..cy {
-            let at = row_stride * j + cx * k + i0;
-            for (c, &z) in zd[at..at + w].iter().enumerate() {
-                buf[c * cy + j] = if z == Z::NONE {
-                    f64::INFINITY
-                } else {
-                    let d = z.to_f64() * sz;
-                    d * d
-                };
+    /// The voxels flagged `from` in slab `fs` (`[j][i]`), row by row.
+    fn find_queries(&mut self, fs: &[u8], cx: usize, from: u8) {
+        self.queries.clear();
+        self.rows.clear();
+        for (j, row) in fs.chunks_exact(cx).enumerate() {
+            let start = self.queries.len();
+            self.queries.extend(
+                row.iter()
+                    .enumerate()
+                    .filter(|(_, f)| **f & from != 0)
+                    .map(|(i, _)| i),
+            );
+            if self.queries.len() > start {
+                self.rows.push((j, start, self.queries.len()));
             }
         }
-        for c in 0..w {
-            env.build(&buf[c * cy..(c + 1) * cy], sy2);
-            let col = i0 + c;
-            env.evaluate_sorted(rows.iter().map(|r| r.0), |j, v| g[cx * j + col] = v);
+    }
+
+    /// Distances at the query voxels by a direct search around each of them,
+    /// or `None` when the searches would visit more than `budget` cells
+    /// (far-apart borders): then the envelopes cost less.
+    fn search<Z: ZDist>(&self, slab: &Slab<'_, Z>, mut budget: usize) -> Option<Vec<f64>> {
+        let mut out = Vec::with_capacity(self.queries.len());
+        for &(j, s, e) in &self.rows {
+            for &p in &self.queries[s..e] {
+                out.push(slab.nearest(p, j, &mut budget)?.sqrt());
+            }
         }
-        i0 += w;
+        Some(out)
+    }
+
+    /// Distances at the query voxels by the last two passes of the separable
+    /// transform. The y pass builds the lower envelope of every column and
+    /// evaluates it on the query rows only, into `g`; columns are transposed
+    /// [`BLOCK`] at a time into `cols`, so that both the reads and the
+    /// envelope's input are contiguous. The x pass builds the envelope of every
+    /// query row and evaluates it at the query voxels.
+    fn envelopes<Z: ZDist>(&mut self, slab: &Slab<'_, Z>) -> Vec<f64> {
+        let SlabScratch {
+            queries,
+            rows,
+            g,
+            cols,
+            env,
+        } = self;
+        let Slab {
+            zs,
+            cx,
+            cy,
+            heights,
+            sx2,
+            sy2,
+            ..
+        } = *slab;
+        let none = Z::NONE.index() as u32;
+        let mut i0 = 0;
+        while i0 < cx {
+            let w = BLOCK.min(cx - i0);
+            for (j, row) in zs.chunks_exact(cx).enumerate() {
+                for (c, &z) in row[i0..i0 + w].iter().enumerate() {
+                    cols[c * cy + j] = z.index() as u32;
+                }
+            }
+            for (c, col) in cols.chunks_exact(cy).take(w).enumerate() {
+                env.build_from(
+                    cy,
+                    sy2,
+                    col.iter()
+                        .enumerate()
+                        .filter(|(_, z)| **z != none)
+                        .map(|(j, &z)| (j, heights[z as usize])),
+                );
+                let mut at = i0 + c;
+                env.evaluate_sorted(rows.iter().map(|r| r.0), |_, v| {
+                    g[at] = v;
+                    at += cx;
+                });
+            }
+            i0 += w;
+        }
+        let mut out = Vec::with_capacity(queries.len());
+        for (r, &(_, s, e)) in rows.iter().enumerate() {
+            env.build(&g[r * cx..(r + 1) * cx], sx2);
+            env.evaluate_sorted(queries[s..e].iter().copied(), |_, d2| out.push(d2.sqrt()));
+        }
+        out
     }
 }
 
 /// For every voxel of the box, the number of slices to the nearest voxel
-/// flagged `to` in the same (i, j) column (`Z::NONE` when the column has none).
-/// Layout `[j][k][i]`, so that every y row is one contiguous block and the
-/// rows run in parallel: a forward and a backward sweep along k per row.
+/// flagged `to` in the same (i, j) column (`Z::NONE` when the column has none),
+/// in the flags' layout (x fastest). Tasks own the same run of [`Z_RUN`]
+/// positions in every slab and sweep it forward then backward along k: whole
+/// contiguous runs at a time, which the compiler vectorises.
 fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
     let [cx, cy, cz] = flags.dims;
-    let mut zd = vec![Z::NONE; cx * cy * cz];
-    zd.par_chunks_mut(cx * cz)
-        .enumerate()
-        .for_each(|(j, block)| {
-            for k in 0..cz {
-                let f = &flags.bits[cx * (j + cy * k)..cx * (j + cy * k + 1)];
-                let (before, rest) = block.split_at_mut(cx * k);
-                let cur = &mut rest[..cx];
-                if k == 0 {
-                    for (z, &b) in cur.iter_mut().zip(f) {
-                        *z = if b & to != 0 { Z::ZERO } else { Z::NONE };
+    let plane = cx * cy;
+    // Zeroed (not filled) memory: the forward sweep writes every voxel.
+    let mut zd = vec![Z::ZERO; plane * cz];
+    let nruns = plane.div_ceil(Z_RUN);
+    let mut runs: Vec<Vec<&mut [Z]>> = (0..nruns).map(|_| Vec::with_capacity(cz)).collect();
+    for slab in zd.chunks_mut(plane) {
+        for (run, part) in runs.iter_mut().zip(slab.chunks_mut(Z_RUN)) {
+            run.push(part);
+        }
+    }
+    runs.into_par_iter().enumerate().for_each(|(r, mut parts)| {
+        let at = r * Z_RUN;
+        for k in 0..cz {
+            let (before, rest) = parts.split_at_mut(k);
+            let cur = &mut rest[0];
+            let fs = &flags.bits[plane * k + at..][..cur.len()];
+            match before.last() {
+                None => {
+                    for (z, &f) in cur.iter_mut().zip(fs) {
+                        *z = if f & to != 0 { Z::ZERO } else { Z::NONE };
                     }
-                } else {
-                    let prev = &before[cx * (k - 1)..];
-                    for ((z, &b), &p) in cur.iter_mut().zip(f).zip(prev) {
-                        *z = if b & to != 0 { Z::ZERO } else { p.succ() };
+                }
+                Some(prev) => {
+                    for ((z, &f), &p) in cur.iter_mut().zip(fs).zip(prev.iter()) {
+                        *z = if f & to != 0 { Z::ZERO } else { p.succ() };
                     }
                 }
             }
-            for k in (0..cz.saturating_sub(1)).rev() {
-                let (cur, next) = block[cx * k..cx * (k + 2)].split_at_mut(cx);
-                for (x, y) in cur.iter_mut().zip(next.iter()) {
-                    let s = y.succ();
-                    if s < *x {
-                        *x = s;
-                    }
-                }
+        }
+        for k in (0..cz.saturating_sub(1)).rev() {
+            let (cur, next) = parts[k..k + 2].split_at_mut(1);
+            for (x, y) in cur[0].iter_mut().zip(next[0].iter()) {
+                *x = (*x).min(y.succ());
             }
-        });
+        }
+    });
     zd
 }
 
@@ -302,13 +431,57 @@ struct Directed {
     within: usize,
 }
 
+/// Distances summed per chunk of this many, then the chunks in order: the same
+/// distances give the same sums whatever the threads do.
+const SUM_CHUNK: usize = 1 << 14;
+
+/// A compensated (Neumaier) running sum: millions of distances add up to
+/// their sum correctly rounded in all but rare cases, in a fixed order.
+#[derive(Clone, Copy, Default)]
+struct Sum {
+    s: f64,
+    c: f64,
+}
+
+impl Sum {
+    #[inline]
+    fn add(self, x: f64) -> Sum {
+        let t = self.s + x;
+        let c = if self.s.abs() >= x.abs() {
+            (self.s - t) + x
+        } else {
+            (x - t) + self.s
+        };
+        Sum {
+            s: t,
+            c: self.c + c,
+        }
+    }
+
+    fn total(self) -> f64 {
+        self.s + self.c
+    }
+}
+
 fn summarise(d: &mut [f64], tol: f64) -> Directed {
     let n = d.len();
-    let sum: f64 = d.par_iter().sum();
-    let max = d.par_iter().copied().reduce_with(f64::max);
     // Distances equal to the tolerance up to rounding count as within it.
     let limit = tol * (1.0 + 1e-12);
-    let within = d.par_iter().filter(|&&x| x <= limit).count();
+    let parts: Vec<(Sum, f64, usize)> = d
+        .par_chunks(SUM_CHUNK)
+        .map(|c| {
+            c.iter()
+                .fold((Sum::default(), f64::NEG_INFINITY, 0), |(s, m, w), &x| {
+                    (s.add(x), m.max(x), w + usize::from(x <= limit))
+                })
+        })
+        .collect();
+    let sum = parts
+        .iter()
+        .fold(Sum::default(), |a, p| a.add(p.0.s).add(p.0.c))
+        .total();
+    let max = (n > 0).then(|| parts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
+    let within = parts.iter().map(|p| p.2).sum();
     Directed {
         n,
         max,
@@ -319,47 +492,130 @@ fn summarise(d: &mut [f64], tol: f64) -> Directed {
     }
 }
 
-/// All border-distance statistics of `seg` against `gt`.
+/// The border counts and every border-distance statistic of `gt` and `seg`
+/// into `m`, whose other fields (`tolerance` for the NSD) are set.
 ///
 /// `bb` is the bounding box of both masks' foreground, or `None` when both are
-/// empty. `tolerance` is the NSD tolerance in physical units.
-pub fn surface_distances<G: MaskView, S: MaskView>(
+/// empty.
+pub(super) fn add_distances<G: MaskView, S: MaskView>(
+    m: &mut Metrics,
     gt: &G,
     seg: &S,
     bb: Option<BoundingBox>,
     spacing: [f64; 3],
-    tolerance: f64,
-) -> SurfaceDistances {
+) {
     let Some(bb) = bb else {
-        return SurfaceDistances::default();
+        return;
     };
     let flags = BorderFlags::new(gt, seg, bb);
     let mut gs = directed(&flags, GT_BIT, SEG_BIT, spacing);
     let mut sg = directed(&flags, SEG_BIT, GT_BIT, spacing);
-    let mut out = SurfaceDistances {
-        border_gt: gs.len() as u64,
-        border_seg: sg.len() as u64,
-        ..SurfaceDistances::default()
-    };
+    m.border_gt = gs.len() as u64;
+    m.border_seg = sg.len() as u64;
     if gs.is_empty() || sg.is_empty() {
         // One border set is empty: every distance is undefined.
-        return out;
+        return;
     }
-    let a = summarise(&mut gs, tolerance);
-    let b = summarise(&mut sg, tolerance);
+    let tol = m.tolerance;
+    let (a, b) = rayon::join(|| summarise(&mut gs, tol), || summarise(&mut sg, tol));
     let n = (a.n + b.n) as f64;
-    out.hd_gt_to_seg = a.max;
-    out.hd_seg_to_gt = b.max;
-    out.hd = a.max.zip(b.max).map(|(x, y)| x.max(y));
-    out.hd95_gt_to_seg = a.p95;
-    out.hd95_seg_to_gt = b.p95;
-    out.hd95 = a.p95.zip(b.p95).map(|(x, y)| x.max(y));
-    out.mean_gt_to_seg = a.mean;
-    out.mean_seg_to_gt = b.mean;
-    out.masd = a.mean.zip(b.mean).map(|(x, y)| (x + y) / 2.0);
-    out.assd = Some((a.sum + b.sum) / n);
-    out.nsd = Some((a.within + b.within) as f64 / n);
+    m.hd_gt_to_seg = a.max;
+    m.hd_seg_to_gt = b.max;
+    m.hd = a.max.zip(b.max).map(|(x, y)| x.max(y));
+    m.hd95_gt_to_seg = a.p95;
+    m.hd95_seg_to_gt = b.p95;
+    m.hd95 = a.p95.zip(b.p95).map(|(x, y)| x.max(y));
+    m.mean_gt_to_seg = a.mean;
+    m.mean_seg_to_gt = b.mean;
+    m.masd = a.mean.zip(b.mean).map(|(x, y)| (x + y) / 2.0);
+    m.assd = Some((a.sum + b.sum) / n);
+    m.nsd = Some((a.within + b.within) as f64 / n);
     gs.append(&mut sg);
-    out.hd95_pooled = percentile(&mut gs, 95.0);
-    out
+    m.hd95_pooled = percentile(&mut gs, 95.0);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Distances from every voxel flagged `from` (slab, row, x order) to the
+    /// nearest flagged `to`, by trying every pair.
+    fn brute(flags: &BorderFlags, from: u8, to: u8, s: [f64; 3]) -> Vec<f64> {
+        let [cx, cy, _] = flags.dims;
+        let at = |n: usize| [n % cx, (n / cx) % cy, n / (cx * cy)];
+        let targets: Vec<[usize; 3]> = (0..flags.bits.len())
+            .filter(|&n| flags.bits[n] & to != 0)
+            .map(at)
+            .collect();
+        (0..flags.bits.len())
+            .filter(|&n| flags.bits[n] & from != 0)
+            .map(|n| {
+                let p = at(n);
+                targets
+                    .iter()
+                    .map(|q| {
+                        (0..3)
+                            .map(|a| ((p[a] as f64 - q[a] as f64) * s[a]).powi(2))
+                            .sum::<f64>()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+                    .sqrt()
+            })
+            .collect()
+    }
+
+    fn flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
+        (
+            1usize..12,
+            1usize..12,
+            1usize..9,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.2f64..3.0,
+        )
+            .prop_flat_map(|(x, y, z, a, b, c)| {
+                (
+                    Just([x, y, z]),
+                    proptest::collection::vec(0u8..4, x * y * z),
+                    proptest::collection::vec(proptest::bool::weighted(0.15), x * y * z),
+                    Just([a, b, c]),
+                )
+            })
+            .prop_map(|(dims, bits, keep, s)| {
+                // Sparse flags: most voxels carry neither bit.
+                let bits = bits
+                    .iter()
+                    .zip(&keep)
+                    .map(|(&b, &k)| if k { b } else { 0 })
+                    .collect();
+                (BorderFlags { dims, bits }, s)
+            })
+    }
+
+    fn same(got: &[f64], want: &[f64]) -> bool {
+        got.len() == want.len()
+            && got
+                .iter()
+                .zip(want)
+                .all(|(g, w)| g == w || (g - w).abs() <= 1e-12 * w.abs().max(1e-12))
+    }
+
+    proptest! {
+        /// The direct search, the envelope passes and both count types give
+        /// the brute-force distances.
+        #[test]
+        fn every_way_matches_brute_force((f, s) in flags()) {
+            for (from, to) in [(GT_BIT, SEG_BIT), (SEG_BIT, GT_BIT)] {
+                let want = brute(&f, from, to, s);
+                let search = directed_with::<u16>(&f, from, to, s, usize::MAX);
+                let envelopes = directed_with::<u16>(&f, from, to, s, 0);
+                let wide = directed_with::<u32>(&f, from, to, s, SEARCH_BUDGET);
+                prop_assert!(same(&search, &want), "search {search:?} vs {want:?}");
+                prop_assert!(same(&envelopes, &want), "envelopes {envelopes:?} vs {want:?}");
+                prop_assert!(same(&wide, &want));
+                prop_assert_eq!(&directed(&f, from, to, s), &wide);
+            }
+        }
+    }
 }

@@ -181,29 +181,19 @@ fn both_empty_gives_nulls_and_json_keys() {
     assert_eq!(m.dice, None);
     assert_eq!(m.specificity, Some(1.0));
     assert_eq!(m.hd, None);
+    // Every key of the `evaluate --json` contract, in its order.
+    let keys = "tp fp fn tn dice jaccard sensitivity specificity precision volume_similarity \
+                volume_gt volume_seg hd hd95 hd95_pooled assd masd nsd tolerance unit \
+                border_gt border_seg hd_gt_to_seg hd_seg_to_gt hd95_gt_to_seg hd95_seg_to_gt \
+                mean_gt_to_seg mean_seg_to_gt";
+    let text = serde_json::to_string(&m).unwrap();
+    // A flat object whose values hold neither ',' nor ':'.
+    let got: Vec<&str> = text[1..text.len() - 1]
+        .split(',')
+        .map(|kv| kv.split(':').next().unwrap_or_default().trim_matches('"'))
+        .collect();
+    assert_eq!(got, keys.split_whitespace().collect::<Vec<_>>());
     let j = serde_json::to_value(&m).unwrap();
-    for k in [
-        "tp",
-        "fp",
-        "fn",
-        "tn",
-        "dice",
-        "jaccard",
-        "sensitivity",
-        "specificity",
-        "precision",
-        "volume_similarity",
-        "volume_gt",
-        "volume_seg",
-        "hd",
-        "hd95",
-        "hd95_pooled",
-        "assd",
-        "masd",
-        "nsd",
-    ] {
-        assert!(j.get(k).is_some(), "missing key {k}");
-    }
     assert!(j["dice"].is_null());
     assert_eq!(j["unit"], "µm");
     assert!(evaluate_all(&a, &a, 1.0).unwrap().is_empty());
