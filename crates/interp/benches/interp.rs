@@ -1,6 +1,7 @@
 //! Interpolation speed: `shape-based` and the default method on a 256³ label
 //! volume drawn every 10th slice (k = 9 skipped), and every registered
-//! method on the 200³ phantom at k = 9.
+//! method on the 200³ phantom at k = 9; the combination of z and x slices
+//! (`multi_axis::combine`) of the 128³ phantom's cell, every 10th slice.
 //!
 //! `cargo bench -p interslice-interp --bench interp`
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -57,5 +58,43 @@ fn bench_phantom_200(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_256, bench_phantom_200);
+fn bench_multi_axis_128(c: &mut Criterion) {
+    use interslice_interp::SparseMask;
+    use interslice_interp::multi_axis::combine;
+    let p = generate(&PhantomParams {
+        size: 128,
+        seed: 1,
+        bits: 8,
+        noise: 0.0,
+    })
+    .expect("phantom");
+    let cell = p.labels.map(|l| l >= 1);
+    let drawn: Vec<usize> = (4..128).step_by(10).collect();
+    let keep = |axis: Axis| {
+        let mut m = Volume::zeros(cell.geometry().clone());
+        for &d in &drawn {
+            m.set_slice(axis, d, &cell.slice(axis, d).expect("in range"))
+                .expect("same");
+        }
+        m
+    };
+    let (z, x) = (keep(Axis::Z), keep(Axis::X));
+    let mut g = c.benchmark_group("multi_axis_128_every_10th");
+    g.sample_size(10);
+    for name in ["shape-based", DEFAULT_METHOD] {
+        let m = by_name(name).expect("registered");
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let inputs = [
+                    SparseMask::new(&z, Axis::Z, &drawn),
+                    SparseMask::new(&x, Axis::X, &drawn),
+                ];
+                combine(m.as_ref(), black_box(&inputs)).expect("ok")
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_256, bench_phantom_200, bench_multi_axis_128);
 criterion_main!(benches);

@@ -16,6 +16,7 @@ pub mod linear;
 pub mod loo;
 pub mod mesh;
 pub mod method;
+pub mod multi_axis;
 pub mod nearest;
 pub mod protocol;
 pub mod registry;

@@ -50,8 +50,9 @@ pub fn is_contours_file(path: &Path) -> bool {
 }
 
 /// The label volume of a contours file on its own grid: each label is
-/// interpolated along the axis with most drawn slices for it, from its own
-/// traced and drawn-empty slices, then painted in ascending label order.
+/// interpolated from its own traced and drawn-empty slices along every axis
+/// with at least two of them (one result per label), then painted in
+/// ascending label order.
 pub fn interpolate(
     file: &ContourFile,
     name: &str,

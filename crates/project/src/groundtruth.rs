@@ -8,10 +8,13 @@
 //! go through [`label_volume`], so one tracing gives one label volume
 //! whichever way it is interpolated. Each label keeps its own drawn slices: a
 //! slice drawn for the nucleus says nothing about the cell outline there.
+//! A label drawn on slices of several axes (x, y and z slices) gives one 3D
+//! result that keeps every drawn slice of every axis
+//! ([`interslice_interp::multi_axis`]), not a union of per-axis results.
 use crate::error::ProjectError;
 use interslice_core::contour_file::ContourFile;
 use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, Volume};
-use interslice_interp::{Interpolator, SparseMask};
+use interslice_interp::{InterpError, Interpolator, SparseMask, multi_axis};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use std::sync::{Arc, Mutex};
@@ -165,13 +168,36 @@ pub fn advise_label(
     )?)
 }
 
-/// Interpolate one label of one tracing along one axis; `cancel` is checked
-/// before and after the method runs (one label is the unit of work).
+/// Interpolate one label of one tracing from its drawn slices along `axis`
+/// and along every other axis with at least two drawn slices for it (one 3D
+/// result, [`interslice_interp::multi_axis::combine`]); returns the mask and
+/// the drawn slices along `axis` (what a preview along `axis` marks as
+/// drawn). `axis` itself needs two drawn slices. `cancel` is checked before
+/// and after the method runs and between the stages of a combination.
 pub fn interpolate_label(
     tracing: &dyn Tracing,
     geometry: &Geometry,
     label: u16,
     axis: Axis,
+    method: &dyn Interpolator,
+    cancel: &Cancel,
+) -> Result<(Mask, Vec<usize>), ProjectError> {
+    let counts: Vec<(Axis, usize)> = tracing
+        .drawn_labels()?
+        .into_iter()
+        .filter(|d| d.0 == label)
+        .map(|d| (d.1, d.2))
+        .collect();
+    interpolate_axes(tracing, geometry, label, axis, &counts, method, cancel)
+}
+
+/// [`interpolate_label`] with the label's drawn-slice counts per axis known.
+fn interpolate_axes(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+    counts: &[(Axis, usize)],
     method: &dyn Interpolator,
     cancel: &Cancel,
 ) -> Result<(Mask, Vec<usize>), ProjectError> {
@@ -183,14 +209,35 @@ pub fn interpolate_label(
             drawn.len()
         )));
     }
-    let out = method.interpolate(SparseMask::new(&mask, axis, &drawn).with_cancel(cancel))?;
+    // The other usable axes, z first (the order of the blend's sums).
+    let mut sparse = vec![(axis, mask, drawn)];
+    for a in [Axis::Z, Axis::Y, Axis::X] {
+        if a != axis && counts.iter().any(|&(b, n)| b == a && n >= 2) {
+            let (m, d) = sparse_mask(tracing, geometry, label, a)?;
+            sparse.push((a, m, d));
+        }
+    }
+    let inputs: Vec<SparseMask<'_>> = sparse
+        .iter()
+        .map(|(a, m, d)| SparseMask::new(m, *a, d).with_cancel(cancel))
+        .collect();
+    let out = multi_axis::combine(method, &inputs).map_err(|e| match e {
+        InterpError::Input(m) if inputs.len() > 1 => {
+            ProjectError::invalid(format!("label {label}: {m}"))
+        }
+        e => e.into(),
+    })?;
     cancel.check()?;
+    let (_, _, drawn) = sparse.swap_remove(0);
     Ok((out, drawn))
 }
 
 /// The full label volume of a tracing: each label drawn is interpolated
-/// along the axis with most drawn slices for it (ties: z, then y, then x),
-/// then painted in ascending label order.
+/// from its drawn slices along every axis with at least two of them (one 3D
+/// result per label, not a union of per-axis results), then painted in
+/// ascending label order. With one such axis this is the interpolation
+/// along it; with none, the error names the axis with most drawn slices
+/// (ties: z, then y, then x).
 pub fn label_volume(
     tracing: &dyn Tracing,
     geometry: &Geometry,
@@ -198,19 +245,13 @@ pub fn label_volume(
     only_label: Option<u16>,
     cancel: &Cancel,
 ) -> Result<LabelVolume, ProjectError> {
-    let drawn = tracing.drawn_labels()?;
-    let mut best: Vec<(u16, Axis, usize)> = Vec::new();
-    for (label, axis, n) in drawn {
-        if only_label.is_some_and(|l| l != label) {
-            continue;
-        }
-        match best.iter_mut().find(|b| b.0 == label) {
-            Some(b) if n > b.2 || (n == b.2 && axis > b.1) => *b = (label, axis, n),
-            Some(_) => {}
-            None => best.push((label, axis, n)),
+    let mut per_label: BTreeMap<u16, Vec<(Axis, usize)>> = BTreeMap::new();
+    for (label, axis, n) in tracing.drawn_labels()? {
+        if only_label.is_none_or(|l| l == label) {
+            per_label.entry(label).or_default().push((axis, n));
         }
     }
-    if best.is_empty() {
+    if per_label.is_empty() {
         return Err(ProjectError::not_found(format!(
             "nothing traced on {}{}",
             tracing.describe(),
@@ -219,10 +260,14 @@ pub fn label_volume(
                 .unwrap_or_default()
         )));
     }
-    best.sort_by_key(|b| b.0);
     let mut out: LabelVolume = Volume::zeros(geometry.clone());
-    for (label, axis, _) in best {
-        let (mask, _) = interpolate_label(tracing, geometry, label, axis, method, cancel)?;
+    for (label, counts) in per_label {
+        let (axis, _) = counts
+            .iter()
+            .copied()
+            .max_by_key(|&(a, n)| (n, a))
+            .expect("a label has an axis");
+        let (mask, _) = interpolate_axes(tracing, geometry, label, axis, &counts, method, cancel)?;
         for (o, &m) in out.data_mut().iter_mut().zip(mask.data()) {
             if m {
                 *o = label;

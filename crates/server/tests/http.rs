@@ -19,13 +19,6 @@ fn contours_of(c: &Client, path: &str) -> Vec<serde_json::Value> {
     serde_json::from_slice(&a.body).expect("contours JSON")
 }
 
-fn read_export(bytes: &[u8], name: &str) -> LabelVolume {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join(name);
-    std::fs::write(&p, bytes).unwrap();
-    interslice_io::read_labels(&p).unwrap()
-}
-
 #[test]
 fn trace_reload_interpolate_export_evaluate() {
     let dir = project();

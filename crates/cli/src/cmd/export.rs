@@ -2,7 +2,7 @@
 //! a user's interpolated label volume of one cell, from the command line.
 //!
 //! The same computation as the server's export: each label the user traced is
-//! interpolated along the axis with most drawn slices, then painted in
+//! interpolated from its drawn slices of every orientation, then painted in
 //! ascending label order. `--out` ending in `.contours.json` writes the user's
 //! contours instead.
 use anyhow::{Context, Result, bail};

@@ -12,7 +12,8 @@
 //!
 //! SPARSE may also be a contours file (`.json`, `docs/contours-format.md`):
 //! then each label is interpolated from its own traced and drawn-empty
-//! slices, along the axis with most of them, by the function the server's
+//! slices, along every axis with at least two of them combined into one
+//! result (`docs/interpolation.md`, "Several orientations"), by the function the server's
 //! export uses (`interslice_project::contour_files::interpolate`), so a
 //! tracing gives the same label volume here and from the server. OUT is a
 //! label volume on the file's grid.

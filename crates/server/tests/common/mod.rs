@@ -60,3 +60,11 @@ pub fn expect(a: &Answer, status: u16) {
         assert!(!e.is_empty() && !e.contains('\n'), "{e:?}");
     }
 }
+
+/// A downloaded label volume file, read back.
+pub fn read_export(bytes: &[u8], name: &str) -> interslice_core::LabelVolume {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join(name);
+    std::fs::write(&p, bytes).unwrap();
+    interslice_io::read_labels(&p).unwrap()
+}
