@@ -31,6 +31,8 @@ export interface TracerElements {
   status: HTMLDivElement;
   /** Volume of the last preview. */
   volume: HTMLDivElement;
+  /** Traced slices, time spent and the predicted Dice of the label (`summary.ts`). */
+  summary: HTMLDivElement;
   done: HTMLInputElement;
   bright: HTMLInputElement;
   contrast: HTMLInputElement;
@@ -166,6 +168,7 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
     unsaved: h("span", { class: "unsaved" }),
     status: h("div", { class: "statusline", testid: "status-line" }),
     volume: h("div", { class: "muted small" }),
+    summary: h("div", { class: "muted small", testid: "tracing-summary" }),
     done,
     bright: range("brightness", "Brightness", s.brightness, (v) => act.setBrightness(v)),
     contrast: range("contrast", "Contrast", s.contrast, (v) => act.setContrast(v)),
@@ -254,6 +257,7 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
       row(e.autoPreview, h("label", { for: "auto-preview" }, "live preview on skipped slices")),
       row(btn("interpolate", "Interpolate", "Interpolate now (I)", () => act.run("interpolate"), "primary")),
       e.volume,
+      e.summary,
     ),
     h(
       "section",

@@ -17,6 +17,7 @@ import { EvalPanel } from "./evalpanel";
 import { buildLayout, fillLabels, fillMethods, fillPresets, type TracerElements } from "./layout";
 import { Panel3D } from "./panel3d";
 import { Previews } from "./preview";
+import { SummaryPanel } from "./summary";
 import { Pen } from "./pen";
 import { newClientId, type Op, type Outbox } from "./queue";
 import { ChangesPending, Tracings, type Target } from "./reconcile";
@@ -70,6 +71,7 @@ export class Tracer {
   private display: DisplayWindow;
   private tracings: Tracings;
   private previews: Previews;
+  private summary: SummaryPanel;
   private time: TimeTracker;
   private panel3d: Panel3D;
   private pen: Pen;
@@ -145,6 +147,7 @@ export class Tracer {
     });
     this.el = this.buildPage();
     this.root = this.el.root;
+    this.summary = new SummaryPanel(api, cell.id, () => this.st.label, this.el.summary);
     this.panel3d = new Panel3D(
       this.el,
       () => this.surfaces(),
@@ -250,6 +253,7 @@ export class Tracer {
     this.ready = true;
     this.time.start();
     this.views.observeResize();
+    void this.summary.refresh();
   }
 
   /** Stop timers and listeners (when leaving the screen). */
@@ -258,6 +262,7 @@ export class Tracer {
     this.disposed = true;
     document.removeEventListener("keydown", this.keyHandler);
     this.time.stop();
+    this.summary.dispose();
     this.views.dispose();
     this.panel3d.dispose();
     this.saveState();
@@ -411,6 +416,7 @@ export class Tracer {
     this.saveState();
     this.syncControls();
     this.targetChanged();
+    void this.summary.refresh();
     this.paintAll();
   }
 
@@ -526,6 +532,7 @@ export class Tracer {
       this.paintAll();
       this.updateStatus();
       this.previews.schedule();
+      this.summary.schedule();
     } catch (e) {
       this.host.toast(e instanceof ChangesPending ? e.message : `${which}: ${(e as Error).message}`, true);
     }
@@ -543,6 +550,7 @@ export class Tracer {
     else void this.tracings.reload(this.target).then(() => this.paintAll());
     const label = op.kind === "contour" ? op.body.label : op.label;
     const axis = op.kind === "contour" ? op.body.axis : op.axis;
+    if (label === this.st.label) this.summary.schedule();
     if (label === this.st.label && axis === this.st.axis && this.host.outbox.pending.length === 0)
       this.previews.schedule();
   }

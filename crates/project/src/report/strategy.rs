@@ -3,7 +3,8 @@
 //! the advice (`interslice_interp::advise`, asked again after each traced
 //! slice, as a tracer following the suggestion would), and the Dice of the
 //! interpolation against the ground truth at every budget: on the skipped
-//! slices and on the whole volume, the mean over the studied labels.
+//! slices and on the whole volume, the mean over the studied labels; and the
+//! minutes the simulated tracer spent (traced slices × seconds per contour / 60).
 use super::write_text;
 use crate::error::ProjectError;
 use interslice_core::{Axis, LabelVolume, Volume};
@@ -177,20 +178,28 @@ impl Simulation<'_> {
     }
 }
 
-/// Write `strategy.csv` and `strategy.md` (a table by budget) into `out`.
-pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
-    let mut csv = String::from("strategy,budget,traced_slices,dice_skipped,dice_volume,traced\n");
+/// Write `strategy.csv` and `strategy.md` (a table by budget) into `out`;
+/// the simulated tracer spends `seconds_per_contour` on each traced slice.
+pub fn write(
+    out: &Path,
+    rows: &[StrategyRow],
+    seconds_per_contour: f64,
+) -> Result<(), ProjectError> {
+    let minutes = |r: &StrategyRow| super::effort::minutes(r.traced.len(), seconds_per_contour);
+    let mut csv =
+        String::from("strategy,budget,traced_slices,dice_skipped,dice_volume,traced,minutes\n");
     for r in rows {
         let traced: Vec<String> = r.traced.iter().map(usize::to_string).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{:.6},{:.6},{}",
+            "{},{},{},{:.6},{:.6},{},{:.3}",
             r.strategy.name(),
             r.budget,
             r.traced.len(),
             r.dice_skipped,
             r.dice_volume,
-            traced.join(" ")
+            traced.join(" "),
+            minutes(r)
         );
     }
     write_text(&out.join("strategy.csv"), &csv)?;
@@ -198,12 +207,13 @@ pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
     budgets.sort_unstable();
     budgets.dedup();
     let find = |s: Strategy, b: usize| rows.iter().find(|r| r.strategy == s && r.budget == b);
-    let mut md = String::from(
+    let mut md = format!(
         "# Which slices to trace: uniform against advised\n\n\
          The outermost slices and `budget` more are traced; Dice of the interpolation \
-         (mean over the labels) on the skipped slices and on the whole volume.\n\n\
-         | budget | traced | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
-         |---:|---:|---:|---:|---:|---:|\n",
+         (mean over the labels) on the skipped slices and on the whole volume; minutes \
+         at {seconds_per_contour} s per traced slice.\n\n\
+         | budget | traced | minutes | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let cell = |r: Option<&StrategyRow>, f: fn(&StrategyRow) -> f64| {
         r.map_or("—".to_string(), |r| format!("{:.4}", f(r)))
@@ -213,7 +223,8 @@ pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
         let traced = u.or(a).map_or(0, |r| r.traced.len());
         let _ = writeln!(
             md,
-            "| {b} | {traced} | {} | {} | {} | {} |",
+            "| {b} | {traced} | {:.1} | {} | {} | {} | {} |",
+            super::effort::minutes(traced, seconds_per_contour),
             cell(u, |r| r.dice_skipped),
             cell(a, |r| r.dice_skipped),
             cell(u, |r| r.dice_volume),
