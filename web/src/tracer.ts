@@ -71,7 +71,7 @@ export class Tracer {
   private display: DisplayWindow;
   private tracings: Tracings;
   private previews: Previews;
-  private summary: SummaryPanel;
+  private tracingSummary: SummaryPanel;
   private time: TimeTracker;
   private panel3d: Panel3D;
   private pen: Pen;
@@ -147,7 +147,7 @@ export class Tracer {
     });
     this.el = this.buildPage();
     this.root = this.el.root;
-    this.summary = new SummaryPanel(api, cell.id, () => this.st.label, this.el.summary);
+    this.tracingSummary = new SummaryPanel(api, cell.id, () => this.st.label, this.el.summary);
     this.panel3d = new Panel3D(
       this.el,
       () => this.surfaces(),
@@ -253,7 +253,7 @@ export class Tracer {
     this.ready = true;
     this.time.start();
     this.views.observeResize();
-    void this.summary.refresh();
+    void this.tracingSummary.refresh();
   }
 
   /** Stop timers and listeners (when leaving the screen). */
@@ -262,7 +262,7 @@ export class Tracer {
     this.disposed = true;
     document.removeEventListener("keydown", this.keyHandler);
     this.time.stop();
-    this.summary.dispose();
+    this.tracingSummary.dispose();
     this.views.dispose();
     this.panel3d.dispose();
     this.saveState();
@@ -416,7 +416,7 @@ export class Tracer {
     this.saveState();
     this.syncControls();
     this.targetChanged();
-    void this.summary.refresh();
+    void this.tracingSummary.refresh();
     this.paintAll();
   }
 
@@ -532,7 +532,7 @@ export class Tracer {
       this.paintAll();
       this.updateStatus();
       this.previews.schedule();
-      this.summary.schedule();
+      this.tracingSummary.schedule();
     } catch (e) {
       this.host.toast(e instanceof ChangesPending ? e.message : `${which}: ${(e as Error).message}`, true);
     }
@@ -550,7 +550,7 @@ export class Tracer {
     else void this.tracings.reload(this.target).then(() => this.paintAll());
     const label = op.kind === "contour" ? op.body.label : op.label;
     const axis = op.kind === "contour" ? op.body.axis : op.axis;
-    if (label === this.st.label) this.summary.schedule();
+    if (label === this.st.label) this.tracingSummary.schedule();
     if (label === this.st.label && axis === this.st.axis && this.host.outbox.pending.length === 0)
       this.previews.schedule();
   }
