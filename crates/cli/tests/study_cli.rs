@@ -145,7 +145,15 @@ fn study_prints_minutes_per_cell_for_a_simulated_tracer() {
             .arg(&gt)
             .arg("--out")
             .arg(&out)
-            .args(["--skips", "2,4", "--methods", "shape-based", "--label", "2", "--quiet"])
+            .args([
+                "--skips",
+                "2,4",
+                "--methods",
+                "shape-based",
+                "--label",
+                "2",
+                "--quiet",
+            ])
             .args(extra)
             .output()
             .unwrap()

@@ -186,12 +186,16 @@ fn simulated_campaign_report() {
         let predicted = num(r, "predicted_dice");
         eprintln!(
             "{} {} label {}: predicted {predicted:.4}, vs truth {:.4}",
-            r["cell"], r["user"], r["label"], num(r, "dice_vs_truth")
+            r["cell"],
+            r["user"],
+            r["label"],
+            num(r, "dice_vs_truth")
         );
         assert!(predicted > 0.8 && predicted <= 1.0, "{r:?}");
     }
     assert!(
-        md.contains("## Time to ground truth") && md.contains("Minutes per cell at predicted Dice ≥ 0.95: "),
+        md.contains("## Time to ground truth")
+            && md.contains("Minutes per cell at predicted Dice ≥ 0.95: "),
         "{md}"
     );
     let tracer = store.user("tracer-a").unwrap().unwrap();

@@ -78,7 +78,11 @@ fn summary_counts_slices_time_and_predicts_the_dice() {
     // The recorded time of the cell wins; a drawn-empty slice is counted.
     expect(
         &alice
-            .json("POST", "/api/cells/cell_01/time", &json!({"seconds": 600.0}))
+            .json(
+                "POST",
+                "/api/cells/cell_01/time",
+                &json!({"seconds": 600.0}),
+            )
             .unwrap(),
         200,
     );
@@ -119,7 +123,10 @@ fn summary_counts_slices_time_and_predicts_the_dice() {
     ] {
         let (status, e) = summary(&rita, q);
         assert_eq!(status, want, "{q}: {e}");
-        assert!(e["error"].as_str().is_some_and(|m| !m.contains('\n')), "{e}");
+        assert!(
+            e["error"].as_str().is_some_and(|m| !m.contains('\n')),
+            "{e}"
+        );
     }
     let a = rita.get("/api/cells/nope/summary?label=1").unwrap();
     assert_eq!(a.status, 404);

@@ -22,8 +22,8 @@
 //! `pairwise_dice.csv`, `ratings.csv`, `report.md`, one strip plot
 //! `volumes_label<L>.svg` per label; and the consensus label volume of each
 //! cell to `--consensus-dir` (default `OUT/consensus/`).
-use crate::consensus::{LabelRaters, consensus_of, rater_masks};
 use super::effort::{Effort, tracing_effort};
+use crate::consensus::{LabelRaters, consensus_of, rater_masks};
 use crate::error::{ProjectError, ResultExt};
 use interslice_core::metrics::overlap_masks;
 use interslice_core::morph::Connectivity;
