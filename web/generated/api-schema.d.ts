@@ -364,6 +364,23 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/cells/{cell}/summary": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /** Traced slices, time spent and the predicted Dice of a label's tracing (reviewers: ?user=) */
+        get: operations["tracing_summary"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/cells/{cell}/time": {
         parameters: {
             query?: never;
@@ -784,6 +801,40 @@ export interface components {
             segmentation?: string | null;
             /** @description A user's interpolated ground truth. */
             user?: string | null;
+        };
+        /**
+         * @description What one user's tracing of one label cost and is expected to give
+         *     (`interslice_project::report::effort`).
+         */
+        TracingSummary: {
+            /** @description The axis the result is interpolated along (most drawn slices). */
+            axis: string;
+            /**
+             * Format: double
+             * @description Sum of the drawing times of the label's contours (seconds).
+             */
+            contour_seconds: number;
+            /** @description Slices of the label marked empty, every axis. */
+            empty_slices: number;
+            /**
+             * Format: int32
+             * @description The label.
+             */
+            label: number;
+            /**
+             * Format: double
+             * @description Leave-one-out predicted Dice of the interpolated result; null with
+             *     fewer than three drawn slices along `axis`.
+             */
+            predicted_dice?: number | null;
+            /**
+             * Format: double
+             * @description Time spent: the user's recorded time on the cell, or the contours'
+             *     drawing time when none was recorded (seconds).
+             */
+            seconds: number;
+            /** @description Slices with contours of the label, every axis. */
+            traced_slices: number;
         };
     };
     responses: never;
@@ -1542,6 +1593,43 @@ export interface operations {
                 };
                 content: {
                     "application/json": unknown;
+                };
+            };
+            /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */
+            "4XX": {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+        };
+    };
+    tracing_summary: {
+        parameters: {
+            query: {
+                /** @description The label summarised. */
+                label: number;
+                /** @description Whose tracing (reviewers: anyone's; default: the signed-in user's). */
+                user?: string;
+                /** @description The interpolation method the result is predicted for (default: the default method). */
+                method?: string;
+            };
+            header?: never;
+            path: {
+                /** @description Cell id (`GET /api/cells`). */
+                cell: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description success */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["TracingSummary"];
                 };
             };
             /** @description {"error": "one line"}: 400 malformed, 401 not signed in, 403 not yours, 404 unknown, 413 too large */

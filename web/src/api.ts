@@ -73,6 +73,8 @@ export interface Advice {
   predicted_dice: number;
   volume_voxels: number;
 }
+/** A user's tracing of one label: slices, time and the predicted Dice (schema `TracingSummary`). */
+export type TracingSummary = Schemas["TracingSummary"];
 
 /** A label (component). No schema. */
 export interface Label {
@@ -254,6 +256,10 @@ export class Api {
    */
   addTime(id: string, seconds: number, keepalive = false): Promise<{ total_seconds: number }> {
     return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds }, keepalive);
+  }
+  /** GET the signed-in user's tracing summary of a label on a cell. */
+  summary(id: string, label: number): Promise<TracingSummary> {
+    return this.json("GET", `/api/cells/${enc(id)}/summary?label=${label}`);
   }
   /** GET /api/labels */
   labels(): Promise<Label[]> {

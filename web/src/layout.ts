@@ -37,6 +37,8 @@ export interface TracerElements {
   advice: HTMLDivElement;
   /** The "done when" threshold, in % Dice. */
   doneWhen: HTMLInputElement;
+  /** Traced slices, time spent and the predicted Dice of the label (`summary.ts`). */
+  summary: HTMLDivElement;
   done: HTMLInputElement;
   bright: HTMLInputElement;
   contrast: HTMLInputElement;
@@ -205,6 +207,7 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
     ),
     advice: h("div", { class: "small", testid: "advice" }),
     doneWhen,
+    summary: h("div", { class: "muted small", testid: "tracing-summary" }),
     done,
     bright: range("brightness", "Brightness", s.brightness, (v) => act.setBrightness(v)),
     contrast: range("contrast", "Contrast", s.contrast, (v) => act.setContrast(v)),
@@ -293,6 +296,7 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
       row(e.autoPreview, h("label", { for: "auto-preview" }, "live preview on skipped slices")),
       row(btn("interpolate", "Interpolate", "Interpolate now (I)", () => act.run("interpolate"), "primary")),
       e.volume,
+      e.summary,
     ),
     h(
       "section",

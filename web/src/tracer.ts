@@ -17,6 +17,7 @@ import { EvalPanel } from "./evalpanel";
 import { buildLayout, fillLabels, fillMethods, fillPresets, type TracerElements } from "./layout";
 import { Panel3D } from "./panel3d";
 import { Previews } from "./preview";
+import { SummaryPanel } from "./summary";
 import { Pen } from "./pen";
 import { newClientId, type Op, type Outbox } from "./queue";
 import { ChangesPending, Tracings, type Target } from "./reconcile";
@@ -73,6 +74,7 @@ export class Tracer {
   private previews: Previews;
   private advisor: Advisor;
   private doneWhen = loadDoneWhen(localStorage);
+  private tracingSummary: SummaryPanel;
   private time: TimeTracker;
   private panel3d: Panel3D;
   private pen: Pen;
@@ -152,6 +154,7 @@ export class Tracer {
     });
     this.el = this.buildPage();
     this.root = this.el.root;
+    this.tracingSummary = new SummaryPanel(api, cell.id, () => this.st.label, this.el.summary);
     this.panel3d = new Panel3D(
       this.el,
       () => this.surfaces(),
@@ -264,6 +267,7 @@ export class Tracer {
     this.ready = true;
     this.time.start();
     this.views.observeResize();
+    void this.tracingSummary.refresh();
   }
 
   /** Stop timers and listeners (when leaving the screen). */
@@ -272,6 +276,7 @@ export class Tracer {
     this.disposed = true;
     document.removeEventListener("keydown", this.keyHandler);
     this.time.stop();
+    this.tracingSummary.dispose();
     this.views.dispose();
     this.panel3d.dispose();
     this.saveState();
@@ -427,6 +432,7 @@ export class Tracer {
     this.saveState();
     this.syncControls();
     this.targetChanged();
+    void this.tracingSummary.refresh();
     this.paintAll();
   }
 
@@ -543,6 +549,7 @@ export class Tracer {
       this.updateStatus();
       this.previews.schedule();
       this.advisor.refresh();
+      this.tracingSummary.schedule();
     } catch (e) {
       this.host.toast(e instanceof ChangesPending ? e.message : `${which}: ${(e as Error).message}`, true);
     }
@@ -560,6 +567,7 @@ export class Tracer {
     else void this.tracings.reload(this.target).then(() => this.paintAll());
     const label = op.kind === "contour" ? op.body.label : op.label;
     const axis = op.kind === "contour" ? op.body.axis : op.axis;
+    if (label === this.st.label) this.tracingSummary.schedule();
     if (label === this.st.label && axis === this.st.axis && this.host.outbox.pending.length === 0) {
       this.previews.schedule();
       this.advisor.refresh();

@@ -40,6 +40,7 @@ describe("shortcuts", () => {
       "c",
       "e",
       "i",
+      "g",
       "x",
       "y",
       "z",

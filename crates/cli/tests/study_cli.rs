@@ -106,6 +106,9 @@ fn strategy_study_compares_uniform_and_advised_slices() {
         let slices: Vec<usize> = row[5].split(' ').map(|s| s.parse().unwrap()).collect();
         assert_eq!(slices.len(), traced);
         assert!(slices.windows(2).all(|w| w[0] < w[1]), "{csv}");
+        // Minutes at the default 45 s per traced slice.
+        let minutes: f64 = row[6].parse().unwrap();
+        assert!((minutes - traced as f64 * 0.75).abs() < 1e-9, "{csv}");
         for dice in [row[3], row[4]] {
             let d: f64 = dice.parse().unwrap();
             assert!(d > 0.5 && d <= 1.0, "{csv}");
@@ -130,6 +133,81 @@ fn strategy_study_compares_uniform_and_advised_slices() {
         .unwrap();
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown strategy 'random'"));
+}
+
+#[test]
+fn study_prints_minutes_per_cell_for_a_simulated_tracer() {
+    let (dir, gt) = phantom_ground_truth();
+    let out = dir.path().join("effort");
+    let study = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_interslice"))
+            .arg("study")
+            .arg(&gt)
+            .arg("--out")
+            .arg(&out)
+            .args([
+                "--skips",
+                "2,4",
+                "--methods",
+                "shape-based",
+                "--label",
+                "2",
+                "--quiet",
+            ])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let r = study(&["--seconds-per-contour", "30"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stdout = String::from_utf8_lossy(&r.stdout).to_string();
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let effort = std::fs::read_to_string(out.join("effort.csv")).unwrap();
+    let mut lines = effort.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "method,skip,traced_slices,seconds_per_contour,minutes,dice_skipped,dice_volume"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2, "{effort}");
+    for row in &rows {
+        let (skip, traced): (usize, usize) = (row[1].parse().unwrap(), row[2].parse().unwrap());
+        assert_eq!(row[3], "30");
+        // minutes = traced slices × 30 s / 60.
+        let minutes: f64 = row[4].parse().unwrap();
+        assert!((minutes - traced as f64 / 2.0).abs() < 1e-9, "{effort}");
+        // The same slices and whole-volume Dice as results.csv.
+        let res: Vec<&str> = results
+            .lines()
+            .find(|l| l.starts_with(&format!("shape-based,{skip},2,")))
+            .unwrap()
+            .split(',')
+            .collect();
+        assert_eq!(res[3], row[2], "{results}");
+        assert_eq!(res[5], row[6], "{results}");
+        let skipped: f64 = row[5].parse().unwrap();
+        assert!(skipped > 0.5 && skipped < 1.0, "{effort}");
+        assert!(
+            stdout.contains(&format!(
+                "k={skip:<2}: {traced:>3} traced slices, {minutes:>6.1} min at 30 s/slice"
+            )),
+            "{stdout}"
+        );
+    }
+    // Fewer slices at k = 4 than at k = 2: fewer minutes.
+    let m: Vec<f64> = rows.iter().map(|r| r[4].parse().unwrap()).collect();
+    assert!(m[1] < m[0], "{effort}");
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("## Time to ground truth") && md.contains("30 s per traced slice"));
+    // The time per contour is bounded.
+    for bad in ["0", "3601", "x"] {
+        let r = study(&["--seconds-per-contour", bad]);
+        assert!(!r.status.success(), "{bad}");
+        assert!(
+            String::from_utf8_lossy(&r.stderr).contains("--seconds-per-contour"),
+            "{bad}"
+        );
+    }
 }
 
 #[test]

@@ -165,6 +165,39 @@ fn simulated_campaign_report() {
         interslice_io::read_labels(&exported).unwrap(),
         interslice_io::read_labels(&out.join("consensus/cell_001_consensus.nii.gz")).unwrap()
     );
+    // The effort columns against the database: slices with contours, and
+    // minutes from the 45 s of drawing time each simulated contour records.
+    for r in &vols {
+        let u = store.user(&r["user"]).unwrap().unwrap();
+        let contours = store
+            .contours(&interslice_store::ContourQuery {
+                cell: r["cell"].clone(),
+                user_id: u.id,
+                axis: None,
+                index: None,
+                label: Some(r["label"].parse().unwrap()),
+            })
+            .unwrap();
+        let slices: std::collections::BTreeSet<usize> =
+            contours.iter().map(|c| c.contour.slice.index).collect();
+        assert_eq!(num(r, "traced_slices") as usize, slices.len(), "{r:?}");
+        let minutes = contours.len() as f64 * 45.0 / 60.0;
+        assert!((num(r, "minutes") - minutes).abs() < 1e-3, "{r:?}");
+        let predicted = num(r, "predicted_dice");
+        eprintln!(
+            "{} {} label {}: predicted {predicted:.4}, vs truth {:.4}",
+            r["cell"],
+            r["user"],
+            r["label"],
+            num(r, "dice_vs_truth")
+        );
+        assert!(predicted > 0.5 && predicted <= 1.0, "{r:?}");
+    }
+    assert!(
+        md.contains("## Time to ground truth")
+            && md.contains("Minutes per cell at predicted Dice ≥ 0.95: "),
+        "{md}"
+    );
     let tracer = store.user("tracer-a").unwrap().unwrap();
     let e = interslice_project::consensus::export_bytes(
         &store,

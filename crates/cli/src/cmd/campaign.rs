@@ -13,6 +13,8 @@
 //! smoothed along the contour (a hand wobbles over a few points, it does not
 //! jump independently at each one). Tracers differ in noise, bias and skip
 //! ([`TRACERS`]); the first two also rate an Otsu segmentation of each cell.
+//! Each contour records [`SECONDS_PER_CONTOUR`] of drawing time, so the
+//! report's minutes per cell are those of a tracer of the 2014 study.
 //! Everything is seeded: the same arguments give the same database content.
 use anyhow::{Context, Result, bail};
 use interslice_core::morph::Connectivity;
@@ -25,6 +27,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::path::{Path, PathBuf};
+
+/// Drawing time recorded per simulated contour (s): within the 30–60 s per
+/// contour of the 2014 study, the default of `study --seconds-per-contour`.
+pub const SECONDS_PER_CONTOUR: f64 = 45.0;
 
 /// Arguments of `campaign`.
 #[derive(clap::Args)]
@@ -239,6 +245,7 @@ fn trace_cell(
                 let contour: NewContour = serde_json::from_value(serde_json::json!({
                     "points": points,
                     "tool": "simulated",
+                    "duration_ms": SECONDS_PER_CONTOUR * 1000.0,
                 }))?;
                 store.add_contour(&key, contour, None)?;
                 count += 1;

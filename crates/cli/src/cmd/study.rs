@@ -1,16 +1,18 @@
 //! `interslice study GROUND_TRUTH --out DIR [--image IMAGE] [--axis z] [--skips 0..9]
-//! [--methods a,b,...] [--label N]`: the interpolation study of the 2014 paper, on
+//! [--methods a,b,...] [--label N] [--seconds-per-contour S]`: the interpolation study of the 2014 paper, on
 //! any fully traced label volume (`interslice_project::report::study` measures
 //! each run and writes the report files). With `--image` (the intensity volume
 //! on the ground truth's grid) the image-guided method is studied too, next to
-//! the shape-only ones. The (method, k) runs go in parallel.
+//! the shape-only ones. The (method, k) runs go in parallel. The time to
+//! ground truth of a tracer spending S seconds per traced slice is printed
+//! (minutes = slices × S / 60, with the Dice) and written to `effort.csv`.
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use interslice_core::Axis;
 use interslice_interp::drawn::nonempty_slices;
 use interslice_interp::{IMAGE_METHOD, Interpolator, by_name_with_image, methods};
 use interslice_project::report::study::{
-    Provenance, Row, StudyReport, measure, phantom_command, write,
+    Provenance, Row, StudyReport, effort_curve, measure, phantom_command, write,
 };
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -49,6 +51,10 @@ pub struct Args {
     /// `A..B` (inclusive) or a list.
     #[arg(long, default_value = "4..12")]
     pub budget: String,
+    /// Seconds the simulated tracer spends per traced slice (30–60 in the
+    /// 2014 study): the minutes of the time-to-ground-truth curve.
+    #[arg(long, default_value_t = 45, value_parser = clap::value_parser!(u32).range(1..=3600))]
+    pub seconds_per_contour: u32,
     /// NSD tolerance in physical units.
     #[arg(long, default_value_t = interslice_core::metrics::DEFAULT_TOLERANCE)]
     pub tolerance: f64,
@@ -154,8 +160,26 @@ pub fn run(a: Args) -> Result<()> {
         skips: &skips,
         rows: &rows,
         seconds: total,
+        seconds_per_contour: f64::from(a.seconds_per_contour),
     };
     write(&a.out, &ctx)?;
+    // The curve of the default method when studied, else the first method's.
+    let shown = names
+        .iter()
+        .find(|&&m| m == interslice_interp::DEFAULT_METHOD)
+        .or(names.first())
+        .copied()
+        .unwrap_or_default();
+    for (m, k, n, minutes, sk, vol) in effort_curve(&ctx) {
+        if m == shown {
+            println!(
+                "{m:<12} k={k:<2}: {n:>3} traced slices, {minutes:>6.1} min at {} s/slice, Dice skipped {}, volume {}",
+                a.seconds_per_contour,
+                sk.map_or("–".into(), |d| format!("{d:.4}")),
+                vol.map_or("–".into(), |d| format!("{d:.4}"))
+            );
+        }
+    }
     eprintln!(
         "study: {} methods x {} skips x {} labels in {total:.1} s, results in {}",
         names.len(),
@@ -226,6 +250,9 @@ fn provenance(a: &Args, label: Option<u16>) -> Provenance {
     if let Some(l) = label {
         let _ = write!(study, " --label {l}");
     }
+    if a.seconds_per_contour != 45 {
+        let _ = write!(study, " --seconds-per-contour {}", a.seconds_per_contour);
+    }
     if a.tolerance != interslice_core::metrics::DEFAULT_TOLERANCE {
         let _ = write!(study, " --tolerance {}", a.tolerance);
     }
@@ -261,13 +288,16 @@ fn run_strategies(
     };
     let started = Instant::now();
     let rows = sim.run(&strategies, &budgets)?;
-    write(&a.out, &rows)?;
+    let spc = f64::from(a.seconds_per_contour);
+    write(&a.out, &rows, spc)?;
     for r in &rows {
         println!(
-            "{:<8} budget {:>2}: {:>2} traced slices, Dice skipped {:.4}, volume {:.4}",
+            "{:<8} budget {:>2}: {:>2} traced slices, {:>6.1} min at {} s/slice, Dice skipped {:.4}, volume {:.4}",
             r.strategy.name(),
             r.budget,
             r.traced.len(),
+            interslice_project::report::effort::minutes(r.traced.len(), spc),
+            a.seconds_per_contour,
             r.dice_skipped,
             r.dice_volume
         );

@@ -4,6 +4,7 @@
 use crate::error::{ProjectError, ResultExt};
 use std::path::Path;
 
+pub mod effort;
 pub mod strategy;
 pub mod study;
 pub mod variability;

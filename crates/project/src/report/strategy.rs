@@ -4,7 +4,8 @@
 //! or by the advice (`interslice_interp::advise`), and the Dice of the
 //! interpolation against the ground truth at every budget: on the skipped
 //! slices of the structure and on the whole volume, per label and as the
-//! mean over the labels.
+//! mean over the labels; and the minutes the simulated tracer spent
+//! (traced slices × seconds per contour / 60).
 //!
 //! The advised tracer knows its budget, as a tracer who set out to trace N
 //! more slices does: before each slice it asks for the advice on the slices
@@ -198,21 +199,29 @@ impl Simulation<'_> {
     }
 }
 
-/// Write `strategy.csv` and `strategy.md` (a table by budget) into `out`.
-pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
-    let mut csv =
-        String::from("strategy,budget,traced_slices,dice_skipped,dice_volume,traced,label\n");
+/// Write `strategy.csv` and `strategy.md` (a table by budget) into `out`;
+/// the simulated tracer spends `seconds_per_contour` on each traced slice.
+pub fn write(
+    out: &Path,
+    rows: &[StrategyRow],
+    seconds_per_contour: f64,
+) -> Result<(), ProjectError> {
+    let minutes = |r: &StrategyRow| super::effort::minutes(r.traced.len(), seconds_per_contour);
+    let mut csv = String::from(
+        "strategy,budget,traced_slices,dice_skipped,dice_volume,traced,minutes,label\n",
+    );
     for r in rows {
         let traced: Vec<String> = r.traced.iter().map(usize::to_string).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{:.6},{:.6},{},{}",
+            "{},{},{},{:.6},{:.6},{},{:.3},{}",
             r.strategy.name(),
             r.budget,
             r.traced.len(),
             r.dice_skipped,
             r.dice_volume,
             traced.join(" "),
+            minutes(r),
             r.label
         );
     }
@@ -229,13 +238,14 @@ pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     let cell = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{x:.4}"));
-    let mut md = String::from(
+    let mut md = format!(
         "# Which slices to trace: uniform against advised\n\n\
          Each structure is traced on its own: its outermost slices and `budget` more. \
          Dice of the interpolation on the structure's skipped slices and on the whole \
-         volume, the mean over the labels.\n\n\
-         | budget | traced | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
-         |---:|---:|---:|---:|---:|---:|\n",
+         volume, the mean over the labels; minutes at {seconds_per_contour} s per traced \
+         slice.\n\n\
+         | budget | traced | minutes | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let (u, a) = (Strategy::Uniform, Strategy::Advised);
     for &b in &budgets {
@@ -245,7 +255,8 @@ pub fn write(out: &Path, rows: &[StrategyRow]) -> Result<(), ProjectError> {
             .map_or(0, |r| r.traced.len());
         let _ = writeln!(
             md,
-            "| {b} | {traced} | {} | {} | {} | {} |",
+            "| {b} | {traced} | {:.1} | {} | {} | {} | {} |",
+            super::effort::minutes(traced, seconds_per_contour),
             cell(mean(u, b, None, |r| r.dice_skipped)),
             cell(mean(a, b, None, |r| r.dice_skipped)),
             cell(mean(u, b, None, |r| r.dice_volume)),

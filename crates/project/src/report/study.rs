@@ -15,10 +15,17 @@
 //! label), one SVG plot per metric (`dice.svg`, ...: the metric against the
 //! number of skipped slices, one line per method, the mean over the studied
 //! labels) and `summary.md`.
+//!
+//! The time to ground truth of a simulated tracer who spends a fixed time
+//! per traced slice (`--seconds-per-contour`, 30–60 s in the 2014 study):
+//! `effort.csv` and a section of `summary.md` give, per method and k, the
+//! traced slices, the minutes (slices × seconds / 60) and the Dice on the
+//! skipped slices and on the whole volume, so the reader sees the minutes a
+//! cell takes at Dice ≥ 0.95.
 use crate::error::{ProjectError, ResultExt};
 use interslice_core::metrics::{Metrics, evaluate_label};
 use interslice_core::{Axis, LabelVolume};
-use interslice_interp::protocol::{drawn_for, sparse_of};
+use interslice_interp::protocol::{dice_on, drawn_for, sparse_of};
 use interslice_interp::{DEFAULT_METHOD, Interpolator, interpolate_labels};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -40,6 +47,8 @@ pub struct Row {
     pub seconds: f64,
     /// Every metric of the label.
     pub metrics: Metrics,
+    /// Dice on the skipped slices only (between the first and last drawn).
+    pub dice_skipped: f64,
 }
 
 /// The metrics plotted and tabulated: (key, title, higher is better).
@@ -71,10 +80,13 @@ pub fn measure(
     let out = interpolate_labels(method, &sparse, axis, &drawn)?;
     let seconds = t.elapsed().as_secs_f64();
     drop(sparse);
+    let skipped: Vec<usize> = (first..=last).filter(|s| !drawn.contains(s)).collect();
     labels
         .iter()
         .map(|&l| {
+            let (a, b) = (out.map(|v| v == l), gt.map(|v| v == l));
             Ok(Row {
+                dice_skipped: dice_on(&a, &b, axis, &skipped),
                 method: method.name().to_string(),
                 skip: k,
                 label: l,
@@ -106,6 +118,8 @@ pub struct StudyReport<'a> {
     pub rows: &'a [Row],
     /// Wall time of the whole study (s).
     pub seconds: f64,
+    /// The simulated tracer's time per traced slice (s).
+    pub seconds_per_contour: f64,
 }
 
 /// A metric of a row by its JSON key (`None` for null).
@@ -113,6 +127,7 @@ fn metric(r: &Row, key: &str) -> Option<f64> {
     let m = &r.metrics;
     match key {
         "dice" => m.dice,
+        "dice_skipped" => Some(r.dice_skipped),
         "jaccard" => m.jaccard,
         "sensitivity" => m.sensitivity,
         "specificity" => m.specificity,
@@ -199,6 +214,7 @@ fn json(ctx: &StudyReport<'_>) -> Result<String, ProjectError> {
         "default_method": DEFAULT_METHOD,
         "skips": ctx.skips,
         "seconds": ctx.seconds,
+        "seconds_per_contour": ctx.seconds_per_contour,
         "rows": ctx.rows,
     });
     serde_json::to_string_pretty(&v).map_err(|e| ProjectError::internal(e.to_string()))
@@ -394,6 +410,7 @@ fn summary(ctx: &StudyReport<'_>) -> String {
             table(&mut s, &series, ctx.skips, true);
         }
     }
+    effort_section(&mut s, ctx);
     let _ = writeln!(
         s,
         "## Time\n\nMean interpolation time per run (all labels), in seconds:\n"
@@ -415,6 +432,101 @@ fn summary(ctx: &StudyReport<'_>) -> String {
         ctx.seconds
     );
     s
+}
+
+/// One point of the time-to-ground-truth curve: (method, k, traced slices,
+/// minutes, Dice on the skipped slices, Dice on the whole volume), the Dice
+/// the mean over the studied labels.
+pub type EffortPoint = (String, usize, usize, f64, Option<f64>, Option<f64>);
+
+/// The time-to-ground-truth curve of every method (see the module docs).
+pub fn effort_curve(ctx: &StudyReport<'_>) -> Vec<EffortPoint> {
+    let skipped = mean_series(ctx, "dice_skipped");
+    let volume = mean_series(ctx, "dice");
+    let mut out = Vec::new();
+    for (m, (name, sk)) in skipped.iter().enumerate() {
+        for (c, &k) in ctx.skips.iter().enumerate() {
+            let Some(drawn) = ctx
+                .rows
+                .iter()
+                .find(|r| r.method == *name && r.skip == k)
+                .map(|r| r.drawn)
+            else {
+                continue;
+            };
+            let minutes = super::effort::minutes(drawn, ctx.seconds_per_contour);
+            out.push((name.clone(), k, drawn, minutes, sk[c], volume[m].1[c]));
+        }
+    }
+    out
+}
+
+fn effort_csv(ctx: &StudyReport<'_>) -> String {
+    let mut s = String::from(
+        "method,skip,traced_slices,seconds_per_contour,minutes,dice_skipped,dice_volume\n",
+    );
+    for (m, k, n, minutes, sk, vol) in effort_curve(ctx) {
+        let _ = writeln!(
+            s,
+            "{m},{k},{n},{},{minutes:.3},{},{}",
+            ctx.seconds_per_contour,
+            fmt_opt(sk),
+            fmt_opt(vol)
+        );
+    }
+    s
+}
+
+/// The summary's "Time to ground truth" section: per method, the fewest
+/// minutes that reach Dice ≥ 0.95 on the whole volume, then the default
+/// method's curve (or the first studied method's).
+fn effort_section(s: &mut String, ctx: &StudyReport<'_>) {
+    let target = super::effort::TARGET_DICE;
+    let curve = effort_curve(ctx);
+    let _ = writeln!(
+        s,
+        "## Time to ground truth\n\nA simulated tracer spends {} s per traced slice; minutes = \
+         traced slices × {} / 60 (`effort.csv`). Fewest minutes per cell at Dice ≥ {target} \
+         (whole volume, mean over the labels):\n\n| method | minutes | traced slices | k |\n|---|---:|---:|---:|",
+        ctx.seconds_per_contour, ctx.seconds_per_contour
+    );
+    for &m in ctx.methods {
+        let best = curve
+            .iter()
+            .filter(|p| p.0 == m && p.5.is_some_and(|d| d >= target))
+            .min_by(|a, b| a.3.total_cmp(&b.3));
+        match best {
+            Some(p) => {
+                let _ = writeln!(s, "| {m} | {:.1} | {} | {} |", p.3, p.2, p.1);
+            }
+            None => {
+                let _ = writeln!(s, "| {m} | not reached | – | – |");
+            }
+        }
+    }
+    let shown = ctx
+        .methods
+        .iter()
+        .find(|&&m| m == DEFAULT_METHOD)
+        .or(ctx.methods.first());
+    if let Some(&m) = shown {
+        let _ = writeln!(
+            s,
+            "\nThe curve of `{m}`:\n\n| k | traced slices | minutes | Dice (skipped) | Dice (volume) |\n|---:|---:|---:|---:|---:|"
+        );
+        for p in curve.iter().filter(|p| p.0 == m) {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.1} | {} | {} |",
+                p.1,
+                p.2,
+                p.3,
+                p.4.map_or("–".into(), |d| format!("{d:.4}")),
+                p.5.map_or("–".into(), |d| format!("{d:.4}"))
+            );
+        }
+    }
+    s.push('\n');
 }
 
 /// A markdown table, methods as rows, skips as columns, best in bold.
@@ -459,10 +571,11 @@ fn table(s: &mut String, series: &[(String, Vec<Option<f64>>)], skips: &[usize],
 }
 
 /// Write the report files into `out` (each atomically): `results.csv`,
-/// `results.json`, one SVG per plotted metric and `summary.md`.
+/// `results.json`, `effort.csv`, one SVG per plotted metric and `summary.md`.
 pub fn write(out: &Path, ctx: &StudyReport<'_>) -> Result<(), ProjectError> {
     super::write_text(&out.join("results.csv"), &csv(ctx.rows))?;
     super::write_text(&out.join("results.json"), &json(ctx)?)?;
+    super::write_text(&out.join("effort.csv"), &effort_csv(ctx))?;
     for &(key, title, _) in PLOTTED {
         let series = mean_series(ctx, key);
         let unit = if matches!(key, "hd95" | "assd") {

@@ -13,12 +13,16 @@
 //! (`DIR/ground_truth/<cell>_labels.*`, as `interslice demo` and `interslice
 //! campaign simulate` write them), every tracing, the consensus and the
 //! majority vote are also scored against them. Ratings of automated
-//! segmentations stored with the cells are listed.
+//! segmentations stored with the cells are listed. Every tracing's effort
+//! is reported with it (`super::effort`): traced slices, minutes spent and
+//! the predicted Dice of its result, and the median minutes per cell of the
+//! tracings predicted to reach Dice 0.95.
 //!
 //! Writes to OUT (default `DIR/variability/`): `volumes.csv`, `summary.csv`,
 //! `pairwise_dice.csv`, `ratings.csv`, `report.md`, one strip plot
 //! `volumes_label<L>.svg` per label; and the consensus label volume of each
 //! cell to `--consensus-dir` (default `OUT/consensus/`).
+use super::effort::{Effort, tracing_effort};
 use crate::consensus::{LabelRaters, consensus_of, rater_masks};
 use crate::error::{ProjectError, ResultExt};
 use interslice_core::metrics::overlap_masks;
@@ -66,6 +70,7 @@ struct UserRow {
     specificity: f64,
     dice_consensus: Option<f64>,
     dice_truth: Option<f64>,
+    effort: Effort,
 }
 
 /// One structure of one cell.
@@ -153,10 +158,11 @@ fn label_row(
     r: &LabelRaters,
     consensus: &interslice_core::staple::Staple,
     truth: Option<&Mask>,
+    efforts: Vec<Effort>,
 ) -> Result<LabelRow, ProjectError> {
     let vv = g.voxel_volume();
     let mut users = Vec::new();
-    for (j, (u, m)) in r.users.iter().zip(&r.masks).enumerate() {
+    for (j, ((u, m), effort)) in r.users.iter().zip(&r.masks).zip(efforts).enumerate() {
         let voxels = count(m);
         users.push(UserRow {
             user: u.clone(),
@@ -166,6 +172,7 @@ fn label_row(
             specificity: consensus.specificity[j],
             dice_consensus: dice(&consensus.consensus, m)?,
             dice_truth: truth.map(|t| dice(t, m)).transpose()?.flatten(),
+            effort,
         });
     }
     let mut pairwise = Vec::new();
@@ -242,7 +249,8 @@ pub fn run(
                 comment: r.comment,
             });
         }
-        if store.tracers_of(cell)?.len() < 2 {
+        let tracers = store.tracers_of(cell)?;
+        if tracers.len() < 2 {
             continue;
         }
         let volume =
@@ -273,6 +281,15 @@ pub fn run(
                 .find(|r| r.label == lc.label)
                 .expect("every consensus label has raters");
             let t = truth.as_ref().map(|t| structure(t, lc.label));
+            let efforts = r
+                .users
+                .iter()
+                .map(|name| {
+                    let id = tracers.iter().find(|u| &u.name == name).map_or(0, |u| u.id);
+                    tracing_effort(store, &g, cell, id, lc.label, method.as_ref(), &never)
+                })
+                .collect::<Result<Vec<_>, _>>()
+                .context_with(|| format!("cell {cell}"))?;
             rows.push(label_row(
                 cell,
                 &label_name(lc.label),
@@ -280,6 +297,7 @@ pub fn run(
                 r,
                 &lc.staple,
                 t.as_ref(),
+                efforts,
             )?);
         }
         progress(&format!(
@@ -337,13 +355,13 @@ fn field(s: &str) -> String {
 
 fn volumes_csv(rows: &[LabelRow], unit: &str) -> String {
     let mut s = format!(
-        "cell,label,structure,user,voxels,volume_{unit}3,dice_vs_consensus,staple_sensitivity,staple_specificity,dice_vs_truth\n"
+        "cell,label,structure,user,voxels,volume_{unit}3,dice_vs_consensus,staple_sensitivity,staple_specificity,dice_vs_truth,traced_slices,empty_slices,minutes,predicted_dice\n"
     );
     for r in rows {
         for u in &r.users {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{:.3},{},{:.6},{:.6},{}",
+                "{},{},{},{},{},{:.3},{},{:.6},{:.6},{},{},{},{:.3},{}",
                 field(&r.cell),
                 r.label,
                 field(&r.name),
@@ -353,7 +371,11 @@ fn volumes_csv(rows: &[LabelRow], unit: &str) -> String {
                 opt(u.dice_consensus, 6),
                 u.sensitivity,
                 u.specificity,
-                opt(u.dice_truth, 6)
+                opt(u.dice_truth, 6),
+                u.effort.traced_slices,
+                u.effort.empty_slices,
+                u.effort.seconds() / 60.0,
+                opt(u.effort.predicted_dice(), 6)
             );
         }
     }
@@ -568,6 +590,15 @@ fn report(
         }
         s.push('\n');
     }
+    let efforts: Vec<(&str, &str, &str, &Effort)> = rows
+        .iter()
+        .flat_map(|r| {
+            r.users
+                .iter()
+                .map(|u| (r.cell.as_str(), u.user.as_str(), r.name.as_str(), &u.effort))
+        })
+        .collect();
+    s.push_str(&super::effort::markdown(&efforts, md));
     let _ = writeln!(s, "## Ratings of automated segmentations\n");
     if ratings.is_empty() {
         let _ = writeln!(s, "No segmentation has been rated.");

@@ -1,4 +1,4 @@
-//! `/api/cells`, `/api/progress` and a cell's detail, status, histogram, time and slices.
+//! `/api/cells`, `/api/progress` and a cell's detail, status, histogram, time, tracing summary and slices.
 use super::*;
 use interslice_core::le::encode_le;
 
@@ -274,6 +274,88 @@ pub(super) async fn add_time(
     state.cell_path(&cell)?;
     let total = state.store.add_time(&cell, user.id, body.seconds)?;
     Ok(Json(serde_json::json!({"total_seconds": total})).into_response())
+}
+
+/// The query of a cell's tracing summary.
+#[derive(Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Query)]
+pub(super) struct SummaryQuery {
+    /// The label summarised.
+    label: u16,
+    /// Whose tracing (reviewers: anyone's; default: the signed-in user's).
+    #[serde(default)]
+    user: Option<String>,
+    /// The interpolation method the result is predicted for (default: the default method).
+    #[serde(default)]
+    method: Option<String>,
+}
+
+/// What one user's tracing of one label cost and is expected to give
+/// (`interslice_project::report::effort`).
+#[derive(Serialize, utoipa::ToSchema)]
+pub struct TracingSummary {
+    /// The label.
+    pub label: u16,
+    /// The axis the result is interpolated along (most drawn slices).
+    pub axis: String,
+    /// Slices with contours of the label, every axis.
+    pub traced_slices: usize,
+    /// Slices of the label marked empty, every axis.
+    pub empty_slices: usize,
+    /// Time spent: the user's recorded time on the cell, or the contours'
+    /// drawing time when none was recorded (seconds).
+    pub seconds: f64,
+    /// Sum of the drawing times of the label's contours (seconds).
+    pub contour_seconds: f64,
+    /// Leave-one-out predicted Dice of the interpolated result; null with
+    /// fewer than three drawn slices along `axis`.
+    pub predicted_dice: Option<f64>,
+}
+
+#[utoipa::path(
+    get,
+    path = "/api/cells/{cell}/summary",
+    tag = "cells",
+    summary = "Traced slices, time spent and the predicted Dice of a label's tracing (reviewers: ?user=)",
+    params(CellPath, SummaryQuery),
+    responses(
+        (status = 200, description = "success", content_type = "application/json", body = TracingSummary),
+        ApiErrors,
+    ),
+)]
+pub(super) async fn tracing_summary(
+    State(state): State<SharedState>,
+    Auth(me): Auth,
+    ApiPath(cell): ApiPath<String>,
+    ApiQuery(q): ApiQuery<SummaryQuery>,
+) -> Result<Json<TracingSummary>, ApiError> {
+    let target = reader_target(&state, &me, q.user.as_deref())?;
+    check_label(&state, q.label)?;
+    let method = method_by_name(q.method.as_deref())?;
+    let c = state.cell(&cell).await?;
+    let st = state.clone();
+    let e = job(&state, move |cancel| {
+        let g = c.volume.geometry();
+        Ok(interslice_project::report::effort::tracing_effort(
+            &st.store,
+            g,
+            &cell,
+            target.id,
+            q.label,
+            method.as_ref(),
+            cancel,
+        )?)
+    })
+    .await?;
+    Ok(Json(TracingSummary {
+        label: e.label,
+        axis: e.axis.to_string(),
+        traced_slices: e.traced_slices,
+        empty_slices: e.empty_slices,
+        seconds: e.seconds(),
+        contour_seconds: e.contour_seconds,
+        predicted_dice: e.predicted_dice(),
+    }))
 }
 
 #[utoipa::path(

@@ -54,6 +54,7 @@ pub fn router() -> (Router<SharedState>, OpenApi) {
             .routes(routes!(set_status))
             .routes(routes!(histogram))
             .routes(routes!(add_time))
+            .routes(routes!(tracing_summary))
             .routes(routes!(slice))
             .routes(routes!(list_contours, add_contour))
             .routes(routes!(delete_contour))
