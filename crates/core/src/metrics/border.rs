@@ -111,7 +111,7 @@ fn any(v: &[bool]) -> bool {
 
 /// Sets `bit` in `out[x - x0]` for every border voxel `(x, y, z)` of `m` with
 /// `x` in `x0..x0 + out.len()`: [`is_border`] for a run of one row, computed
-/// [`RUN`] voxels at a time from whole runs of the row and of its four
+/// `RUN` voxels at a time from whole runs of the row and of its four
 /// neighbour rows (runs without foreground are skipped after one read).
 pub fn mark_border_row<M: MaskView>(m: &M, y: usize, z: usize, x0: usize, out: &mut [u8], bit: u8) {
     let [nx, ny, nz] = m.dims();

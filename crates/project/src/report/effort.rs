@@ -70,7 +70,7 @@ fn held_positions(n: usize, max: usize) -> Vec<usize> {
 /// The leave-one-out predicted Dice of interpolating `mask` (drawn on the
 /// ascending slices `drawn` along `axis`) with `method`; `None` with fewer
 /// than three drawn slices (no inner slice to hold out). Each held-out slice
-/// is predicted from at most [`NEIGHBOURS`] drawn slices on each side,
+/// is predicted from at most `NEIGHBOURS` drawn slices on each side,
 /// stacked compactly (`interslice_interp::loo::stack`), so one estimate
 /// costs at most [`MAX_HELD_OUT`] interpolations of five slices.
 pub fn predicted_dice(
