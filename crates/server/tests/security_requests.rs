@@ -15,7 +15,7 @@ use std::io::{Read as _, Write as _};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-const PW: &str = "correct horse battery";
+const PW: &str = TEAM_PASSWORD;
 
 /// Wait until the server computes nothing (a job that is not stopped runs
 /// for minutes: the bound is only there to fail instead of hanging).
@@ -298,23 +298,7 @@ fn json_routes_want_application_json() {
 #[test]
 fn ratings_belong_to_their_author_and_the_reviewers() {
     let dir = project();
-    let mut cfg = config(dir.path());
-    cfg.require_login = true;
-    let server = serve(cfg);
-    let store = &server.state.store;
-    for (name, role) in [
-        ("alice", Role::Tracer),
-        ("bob", Role::Tracer),
-        ("rita", Role::Reviewer),
-    ] {
-        store.upsert_user(name, role, Some(PW)).unwrap();
-    }
-    let login = |name: &str| {
-        let mut c = Client::new(&server.url());
-        expect(&c.login(name, Some(PW)).unwrap(), 200);
-        c
-    };
-    let (alice, bob, rita) = (login("alice"), login("bob"), login("rita"));
+    let (_server, [alice, bob, rita]) = team(dir.path());
     let s = alice
         .json(
             "POST",

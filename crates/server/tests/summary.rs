@@ -3,32 +3,13 @@
 mod common;
 
 use common::*;
-use interslice_store::Role;
 use interslice_test_support::client::Client;
 use serde_json::json;
-
-const PW: &str = "correct horse battery";
 
 #[test]
 fn summary_counts_slices_time_and_predicts_the_dice() {
     let dir = project();
-    let mut cfg = config(dir.path());
-    cfg.require_login = true;
-    let server = serve(cfg);
-    let store = &server.state.store;
-    for (name, role) in [
-        ("alice", Role::Tracer),
-        ("bob", Role::Tracer),
-        ("rita", Role::Reviewer),
-    ] {
-        store.upsert_user(name, role, Some(PW)).unwrap();
-    }
-    let login = |name: &str| {
-        let mut c = Client::new(&server.url());
-        expect(&c.login(name, Some(PW)).unwrap(), 200);
-        c
-    };
-    let (alice, bob, rita) = (login("alice"), login("bob"), login("rita"));
+    let (_server, [alice, bob, rita]) = team(dir.path());
     let summary = |c: &Client, query: &str| {
         let a = c
             .get(&format!("/api/cells/cell_01/summary?{query}"))

@@ -68,3 +68,33 @@ pub fn read_export(bytes: &[u8], name: &str) -> interslice_core::LabelVolume {
     std::fs::write(&p, bytes).unwrap();
     interslice_io::read_labels(&p).unwrap()
 }
+
+/// The password of the accounts of [`team`].
+pub const TEAM_PASSWORD: &str = "correct horse battery";
+
+/// A server that requires passwords, with tracers alice and bob and reviewer
+/// rita, and a client signed in as each (alice, bob, rita).
+pub fn team(dir: &Path) -> (RunningServer, [Client; 3]) {
+    use interslice_store::Role;
+    let mut cfg = config(dir);
+    cfg.require_login = true;
+    let server = serve(cfg);
+    let names = [
+        ("alice", Role::Tracer),
+        ("bob", Role::Tracer),
+        ("rita", Role::Reviewer),
+    ];
+    for (name, role) in names {
+        server
+            .state
+            .store
+            .upsert_user(name, role, Some(TEAM_PASSWORD))
+            .unwrap();
+    }
+    let clients = names.map(|(name, _)| {
+        let mut c = Client::new(&server.url());
+        expect(&c.login(name, Some(TEAM_PASSWORD)).unwrap(), 200);
+        c
+    });
+    (server, clients)
+}
