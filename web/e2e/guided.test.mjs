@@ -1,8 +1,9 @@
 // Guided tracing end to end, against the real `interslice demo` server in
 // headless Chromium: trace the first and last slice of the nucleus, then
 // follow the suggestion key (G) three times, each time landing on the slice
-// the badge on the working view names and tracing it; the export reproduces
-// every traced slice and matches the phantom's nucleus.
+// the badge on the working view names and tracing it; then trace one x slice
+// through the nucleus on the x view; the export reproduces every traced slice
+// of both orientations and matches the phantom's nucleus.
 import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
@@ -30,6 +31,8 @@ let br;
 let dense;
 /** The z slices traced, in order. */
 const traced = [];
+/** The x slice traced after the z slices. */
+let tracedX = null;
 
 const summary = () => br.page.evaluate(() => window.__interslice.tracer().summary());
 const idle = () => br.page.evaluate(() => window.__interslice.tracer().idle());
@@ -106,6 +109,22 @@ test("trace the outermost slices, then follow the suggestion key three times", a
   assert.match(advice, /predicted Dice 0\.\d{3}/);
 });
 
+test("trace one x slice through the nucleus on the x view", async () => {
+  const { page } = br;
+  const side = outlines(demo, path.join(demo.dir, "ground_truth", `${CELL}_labels.nii.gz`), 1, NUCLEUS, "x");
+  const xs = [...side.keys()].sort((a, b) => a - b);
+  tracedX = xs[Math.floor(xs.length / 2)];
+  await page.getByTestId("axis-select").selectOption("x");
+  assert.equal(await page.locator(".slot-main").getByTestId("view-x").count(), 1);
+  await gotoSlice(tracedX);
+  await traceSlice("x", side.get(tracedX));
+  const sum = await summary();
+  assert.equal(sum.axis, "x");
+  assert.deepEqual(sum.drawn, [tracedX]);
+  assert.equal(sum.pending, 0);
+  await shot(page, "guided-x-slice");
+});
+
 test("the export reproduces every traced slice and matches the phantom's nucleus", async () => {
   const { page } = br;
   const fetchTo = async (url, file) => {
@@ -136,6 +155,16 @@ test("the export reproduces every traced slice and matches the phantom's nucleus
     assert.ok(inside > 0, `slice ${k} has the traced nucleus`);
     assert.equal(differ, 0, `slice ${k}: the export is the tracing exactly`);
   }
+  // The x slice too: every voxel of x = tracedX as traced.
+  let differ = 0;
+  let inside = 0;
+  for (let o = tracedX; o < e.values.length; o += nx) {
+    const want = r.values[o] === NUCLEUS;
+    if (want) inside++;
+    if ((e.values[o] === NUCLEUS) !== want) differ++;
+  }
+  assert.ok(inside > 0, `x slice ${tracedX} has the traced nucleus`);
+  assert.equal(differ, 0, `x slice ${tracedX}: the export is the tracing exactly`);
   const gt = path.join(demo.dir, "ground_truth", `${CELL}_labels.nii.gz`);
   const m = JSON.parse(cli("evaluate", gt, exported, "--label", String(NUCLEUS), "--json"));
   assert.ok(m.dice > 0.85, `5 guided slices: Dice ${m.dice}`);

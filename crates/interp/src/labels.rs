@@ -8,6 +8,10 @@
 //! entirely by higher labels (the nucleus inside the cell) belong to the
 //! label's own mask. Holes holding background stay holes. Painting in
 //! ascending order then reproduces every drawn slice exactly.
+//!
+//! A method that stays within its tracing ([`Interpolator::bounded_by_tracing`])
+//! runs on the label's box only ([`crate::crop`]), with the same result.
+use crate::crop::{DrawnSlice, LabelBox};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
@@ -41,8 +45,14 @@ pub fn interpolate_labels_with_confidence(
     Ok((labels, conf.expect("confidence requested")))
 }
 
+/// A label's result: on its box ([`crate::crop`]) or on the whole volume.
+enum Piece {
+    Boxed(LabelBox, Mask),
+    Whole(Mask),
+}
+
 /// A label's result and, when asked, its confidence.
-type LabelResult = Result<(Mask, Option<Volume<f32>>), InterpError>;
+type LabelResult = Result<(Piece, Option<Volume<f32>>), InterpError>;
 
 fn run(
     method: &dyn Interpolator,
@@ -62,13 +72,27 @@ fn run(
     let results: Vec<LabelResult> = labels
         .par_iter()
         .map(|&l| {
-            let m = traced_mask(sparse, axis, &drawn, l);
+            let filled = traced_slices(sparse, axis, &drawn, l);
+            if method.bounded_by_tracing() && !confidence {
+                let slices: Vec<DrawnSlice<'_>> = drawn
+                    .iter()
+                    .zip(&filled)
+                    .map(|(&index, inside)| DrawnSlice { index, inside })
+                    .collect();
+                let dims = sparse.geometry().dims;
+                if let Some(b) = LabelBox::of(dims, axis, &slices)
+                    && let Some(m) = b.interpolate(method, sparse.geometry(), axis, &slices)?
+                {
+                    return Ok((Piece::Boxed(b, m), None));
+                }
+            }
+            let m = mask_of_slices(sparse, axis, &drawn, &filled);
             let input = SparseMask::new(&m, axis, &drawn);
             if confidence {
                 let (mask, c) = method.interpolate_with_confidence(input)?;
-                Ok((mask, Some(c)))
+                Ok((Piece::Whole(mask), Some(c)))
             } else {
-                Ok((method.interpolate(input)?, None))
+                Ok((Piece::Whole(method.interpolate(input)?), None))
             }
         })
         .collect();
@@ -76,15 +100,19 @@ fn run(
     let mut conf: Option<Volume<f32>> =
         confidence.then(|| Volume::filled(sparse.geometry().clone(), 1.0f32));
     for (l, r) in labels.iter().zip(results) {
-        let (m, c) = r?;
-        out.data_mut()
-            .par_iter_mut()
-            .zip(m.data().par_iter())
-            .for_each(|(o, &inside)| {
-                if inside {
-                    *o = *l;
-                }
-            });
+        let (piece, c) = r?;
+        match piece {
+            Piece::Boxed(b, m) => b.paint(&mut out, &m, *l),
+            Piece::Whole(m) => out
+                .data_mut()
+                .par_iter_mut()
+                .zip(m.data().par_iter())
+                .for_each(|(o, &inside)| {
+                    if inside {
+                        *o = *l;
+                    }
+                }),
+        }
         if let (Some(all), Some(c)) = (conf.as_mut(), c) {
             all.data_mut()
                 .par_iter_mut()
@@ -132,9 +160,19 @@ pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u1
 /// whole structure of the label on each, as a 2D image with 8-connected
 /// holes ([`interslice_core::regions::whole_structure`]).
 pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Mask {
-    let mut m: Mask = Volume::zeros(sparse.geometry().clone());
+    mask_of_slices(
+        sparse,
+        axis,
+        drawn,
+        &traced_slices(sparse, axis, drawn, label),
+    )
+}
+
+/// The whole structure of `label` on each drawn slice, row-major as
+/// [`Volume::slice`] gives it.
+fn traced_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Vec<Vec<bool>> {
     let (w, h) = sparse.slice_shape(axis);
-    let filled: Vec<Vec<bool>> = drawn
+    drawn
         .par_iter()
         .map(|&d| {
             let s = sparse.slice(axis, d).expect("validated drawn index");
@@ -145,8 +183,13 @@ pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16
                 .into_parts()
                 .1
         })
-        .collect();
-    for (&d, f) in drawn.iter().zip(&filled) {
+        .collect()
+}
+
+/// A mask of `sparse`'s grid holding `filled` on the drawn slices.
+fn mask_of_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], filled: &[Vec<bool>]) -> Mask {
+    let mut m: Mask = Volume::zeros(sparse.geometry().clone());
+    for (&d, f) in drawn.iter().zip(filled) {
         m.set_slice(axis, d, f).expect("slice shape matches");
     }
     m

@@ -9,6 +9,7 @@ pub mod advise;
 pub mod aligned;
 pub mod auto;
 pub mod confidence;
+pub mod crop;
 pub mod drawn;
 pub mod image;
 pub mod labels;

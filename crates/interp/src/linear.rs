@@ -28,6 +28,10 @@ use rayon::prelude::*;
 pub struct Linear;
 
 impl Interpolator for Linear {
+    fn bounded_by_tracing(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &'static str {
         "linear"
     }

@@ -85,6 +85,14 @@ pub trait Interpolator: Send + Sync {
         let c = crate::confidence::shape_confidence(&m, &input, 1.0);
         Ok((m, c))
     }
+    /// True when the result never leaves the in-plane bounding box of the
+    /// drawn outlines nor the drawn slices around the first and last drawn
+    /// slice that show the label: the runner then works on that box alone
+    /// ([`crate::crop`]). Image-aware methods (whose statistics depend on
+    /// the surroundings) and mesh methods keep the default, `false`.
+    fn bounded_by_tracing(&self) -> bool {
+        false
+    }
     /// The surface a mesh-based method builds from the drawn slices, in
     /// physical (x, y, z), before the drawn slices are restored (see
     /// [`crate::mesh`]); `Ok(None)` for the methods that work on voxels, whose

@@ -19,7 +19,9 @@
 //!    (no drawn slice on one side) has weight 0, because its method produces
 //!    nothing there: it does not know, rather than knowing "outside";
 //! 4. the object is where the average is negative;
-//! 5. every drawn slice of every axis is written back exactly. Where two
+//! 5. every drawn slice of every axis is written back exactly, also those of
+//!    an axis with a single drawn slice (which takes no part in steps 1–4:
+//!    one slice does not say how the object goes on along its axis). Where two
 //!    drawn slices cross, their masks agree on the crossing line (checked
 //!    first by [`check_crossings`]); the few voxels tolerated to differ there
 //!    are inside only when both slices say inside.
@@ -49,10 +51,14 @@ use rayon::prelude::*;
 pub const CROSSING_TOLERANCE: usize = 1;
 
 /// The combined mask of one label traced along several axes (at most one
-/// input per axis, all on the same grid, each with at least two drawn slices;
-/// see the module documentation for the method and why).
+/// input per axis, all on the same grid; the first with at least two drawn
+/// slices, the others with one or more; see the module documentation for the
+/// method and why).
 ///
-/// With a single input this is `method.interpolate(input)`, bit for bit.
+/// An axis with a single drawn slice gives no interpolation along it: its
+/// slice is checked against the others' crossings and written back, and
+/// nothing else. With one input of two or more drawn slices the result is
+/// `method.interpolate(input)`, bit for bit, plus those slices.
 /// Contradicting crossings are a one-line [`InterpError::Input`] naming the
 /// two slices. The first input's cancellation token is checked between the
 /// stages (one axis's interpolation, each transform, the stamping).
@@ -64,8 +70,13 @@ pub fn combine(method: &dyn Interpolator, inputs: &[SparseMask<'_>]) -> Result<M
         return method.interpolate(*first);
     }
     let geometry = first.mask.geometry().clone();
+    first.validate()?;
     for (n, input) in inputs.iter().enumerate() {
-        input.validate()?;
+        if input.drawn.len() >= 2 {
+            input.validate()?;
+        } else {
+            validate_single(input)?;
+        }
         if input.mask.geometry().dims != geometry.dims {
             return Err(InterpError::Input(
                 "the masks of the axes are not on one grid".into(),
@@ -79,6 +90,14 @@ pub fn combine(method: &dyn Interpolator, inputs: &[SparseMask<'_>]) -> Result<M
         }
     }
     check_crossings(inputs)?;
+    let blended: Vec<&SparseMask<'_>> = inputs.iter().filter(|i| i.drawn.len() >= 2).collect();
+    if blended.len() == 1 {
+        first.check_cancelled()?;
+        let mut out = method.interpolate(*first)?;
+        first.check_cancelled()?;
+        stamp(&mut out, inputs);
+        return Ok(out);
+    }
     let dims = geometry.dims;
     let spacing = geometry.spacing;
     let h = spacing.iter().copied().fold(f64::INFINITY, f64::min);
@@ -92,6 +111,9 @@ pub fn combine(method: &dyn Interpolator, inputs: &[SparseMask<'_>]) -> Result<M
     let weights: Vec<Vec<f32>> = inputs.iter().map(|i| axis_weights(i, h)).collect();
     let mut acc = vec![0.0f32; geometry.len()];
     for (input, w) in inputs.iter().zip(&weights) {
+        if input.drawn.len() < 2 {
+            continue;
+        }
         first.check_cancelled()?;
         let result = method.interpolate(*input)?;
         first.check_cancelled()?;
@@ -151,6 +173,57 @@ pub fn combine(method: &dyn Interpolator, inputs: &[SparseMask<'_>]) -> Result<M
         });
     first.check_cancelled()?;
     Ok(out)
+}
+
+/// The checks of [`SparseMask::validate`] for an input of one drawn slice.
+fn validate_single(input: &SparseMask<'_>) -> Result<(), InterpError> {
+    let n = input.mask.slice_count(input.axis);
+    match input.drawn {
+        [d] if *d < n => Ok(()),
+        [d] => Err(InterpError::Input(format!(
+            "drawn slice {}={d} is out of range (0..{n})",
+            input.axis
+        ))),
+        _ => Err(InterpError::Input(format!(
+            "no drawn slice along {}",
+            input.axis
+        ))),
+    }
+}
+
+/// Write every drawn slice of every input into `out`; where drawn slices
+/// cross, inside only where all of them say inside (as the blend does).
+fn stamp(out: &mut Mask, inputs: &[SparseMask<'_>]) {
+    let g = out.geometry().clone();
+    let [nx, ny, nz] = g.dims;
+    let data = out.data_mut();
+    for input in inputs {
+        for &d in input.drawn {
+            for (i, j, k) in slice_voxels(input.axis, d, [nx, ny, nz]) {
+                let idx = g.index(i, j, k);
+                let all = inputs.iter().all(|o| {
+                    let v = [i, j, k][o.axis.dim()];
+                    o.drawn.binary_search(&v).is_err() || o.mask.data()[idx]
+                });
+                data[idx] = all;
+            }
+        }
+    }
+}
+
+/// The voxels of slice `index` along `axis` of a volume of `dims`.
+fn slice_voxels(
+    axis: Axis,
+    index: usize,
+    dims: [usize; 3],
+) -> impl Iterator<Item = (usize, usize, usize)> {
+    let (a, b) = axis.in_plane();
+    (0..dims[b]).flat_map(move |v| {
+        (0..dims[a]).map(move |u| {
+            let [i, j, k] = axis.voxel(index, u, v);
+            (i, j, k)
+        })
+    })
 }
 
 /// The blending weight of every slice along the input's axis: `1 / (d/h + 1)²`

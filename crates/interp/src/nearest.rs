@@ -12,6 +12,10 @@ use interslice_core::Mask;
 pub struct Nearest;
 
 impl Interpolator for Nearest {
+    fn bounded_by_tracing(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &'static str {
         "nearest"
     }

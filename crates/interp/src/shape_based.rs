@@ -40,6 +40,10 @@ pub fn drawn_sdfs(
 }
 
 impl Interpolator for ShapeBased {
+    fn bounded_by_tracing(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &'static str {
         "shape-based"
     }

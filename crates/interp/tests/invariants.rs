@@ -2,7 +2,7 @@
 //! on random blobs, random drawn slices, any axis and anisotropic spacing;
 //! and the multi-label contract of `interpolate_labels`.
 use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
-use interslice_interp::{SparseMask, interpolate_labels, methods};
+use interslice_interp::{InterpError, Interpolator, SparseMask, interpolate_labels, methods};
 use proptest::prelude::*;
 
 /// Up to three random ellipsoids in a small anisotropic volume.
@@ -63,6 +63,50 @@ proptest! {
                     "{} changed drawn slice {}={}", m.name(), axis, d
                 );
             }
+        }
+    }
+}
+
+/// A method as it is, but never run on its label's box.
+struct Unboxed(Box<dyn Interpolator>);
+
+impl Interpolator for Unboxed {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn description(&self) -> &'static str {
+        self.0.description()
+    }
+    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        self.0.interpolate(input)
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// The label runner may run a bounded method on the label's box only
+    /// (`interslice_interp::crop`): the result must be the whole volume's,
+    /// voxel for voxel, whatever the blobs, the axis and the drawn slices.
+    #[test]
+    fn a_label_box_gives_the_whole_volume_result(
+        full in blobs(),
+        axis in prop::sample::select(Axis::ALL.to_vec()),
+        picks in prop::collection::btree_set(0usize..16, 2..9),
+    ) {
+        let n = full.slice_count(axis);
+        let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
+        prop_assume!(drawn.len() >= 2);
+        let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
+        for &d in &drawn {
+            let s: Vec<u16> = full.slice(axis, d).unwrap().iter().map(|&b| u16::from(b) * 3).collect();
+            sparse.set_slice(axis, d, &s).unwrap();
+        }
+        for m in methods().into_iter().filter(|m| m.bounded_by_tracing()) {
+            let boxed = interpolate_labels(m.as_ref(), &sparse, axis, &drawn).unwrap();
+            let name = m.name();
+            let whole = interpolate_labels(&Unboxed(m), &sparse, axis, &drawn).unwrap();
+            prop_assert!(boxed == whole, "{} differs on its box along {}", name, axis);
         }
     }
 }

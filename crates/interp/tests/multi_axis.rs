@@ -56,15 +56,19 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
     /// Slices drawn from one truth along two or three axes (so crossings
-    /// agree): each one is in the result, empty ones included.
+    /// agree), one slice or several on the second and third: each one is in
+    /// the result, empty ones included.
     #[test]
     fn every_drawn_slice_of_every_axis_is_reproduced(
         full in blobs(),
-        picks in prop::collection::vec(prop::collection::btree_set(0usize..14, 2..6), 3),
+        first in prop::collection::btree_set(0usize..14, 2..6),
+        others in prop::collection::vec(prop::collection::btree_set(0usize..14, 1..6), 2),
         axes in 2usize..=3,
         name in prop::sample::select(vec!["shape-based", "linear", "nearest"]),
     ) {
+        // The first axis needs two drawn slices; the others may have one.
         let all = [Axis::Z, Axis::X, Axis::Y];
+        let picks: Vec<_> = std::iter::once(first).chain(others).collect();
         let drawn: Vec<(Axis, Vec<usize>)> = all[..axes]
             .iter()
             .zip(&picks)
@@ -122,6 +126,41 @@ fn crossings_and_drawn_empty_slices_are_kept_and_the_blend_beats_the_worse_axis(
         db > dz + 0.05 && db > dx - 0.01,
         "both {db:.4}, z {dz:.4}, x {dx:.4}"
     );
+}
+
+/// A single x slice added to a z tracing is written back; every other voxel
+/// is the z interpolation's.
+#[test]
+fn a_single_slice_of_another_axis_is_written_back() {
+    let ball = shape([24, 22, 26], [1.0, 1.0, 1.5], |p| {
+        in_ellipsoid(p, [12.0, 11.0, 19.0], [8.0, 6.0, 13.0])
+    });
+    let z = vec![3, 9, 15, 21];
+    let x = vec![10];
+    let (mz, mx) = (sparse(&ball, Axis::Z, &z), sparse(&ball, Axis::X, &x));
+    let m = method("shape-based");
+    let both = combine(
+        m.as_ref(),
+        &[
+            SparseMask::new(&mz, Axis::Z, &z),
+            SparseMask::new(&mx, Axis::X, &x),
+        ],
+    )
+    .unwrap();
+    assert_reproduced(&both, &ball, &[(Axis::Z, z.clone()), (Axis::X, x.clone())]);
+    let only_z = m.interpolate(SparseMask::new(&mz, Axis::Z, &z)).unwrap();
+    let g = ball.geometry();
+    let mut changed = 0;
+    for (idx, (&b, &o)) in both.data().iter().zip(only_z.data()).enumerate() {
+        if g.ijk(idx)[0] != 10 {
+            assert_eq!(b, o, "voxel {:?} off the x slice changed", g.ijk(idx));
+        } else {
+            changed += usize::from(b != o);
+        }
+    }
+    // The x slice corrects the z interpolation there.
+    assert!(changed > 0);
+    assert!(dice(&both, &ball) > dice(&only_z, &ball));
 }
 
 /// One input is exactly the method's own result.

@@ -169,8 +169,9 @@ pub fn advise_label(
 }
 
 /// Interpolate one label of one tracing from its drawn slices along `axis`
-/// and along every other axis with at least two drawn slices for it (one 3D
-/// result, [`interslice_interp::multi_axis::combine`]); returns the mask and
+/// and along every other axis with drawn slices for it (one 3D result,
+/// [`interslice_interp::multi_axis::combine`]; an axis with a single drawn
+/// slice only has it written back); returns the mask and
 /// the drawn slices along `axis` (what a preview along `axis` marks as
 /// drawn). `axis` itself needs two drawn slices. `cancel` is checked before
 /// and after the method runs and between the stages of a combination.
@@ -209,10 +210,11 @@ fn interpolate_axes(
             drawn.len()
         )));
     }
-    // The other usable axes, z first (the order of the blend's sums).
+    // The other axes, z first (the order of the blend's sums); one with a
+    // single drawn slice only has that slice written back.
     let mut sparse = vec![(axis, mask, drawn)];
     for a in [Axis::Z, Axis::Y, Axis::X] {
-        if a != axis && counts.iter().any(|&(b, n)| b == a && n >= 2) {
+        if a != axis && counts.iter().any(|&(b, n)| b == a && n >= 1) {
             let (m, d) = sparse_mask(tracing, geometry, label, a)?;
             sparse.push((a, m, d));
         }
@@ -234,8 +236,9 @@ fn interpolate_axes(
 
 /// The full label volume of a tracing: each label drawn is interpolated
 /// from its drawn slices along every axis with at least two of them (one 3D
-/// result per label, not a union of per-axis results), then painted in
-/// ascending label order. With one such axis this is the interpolation
+/// result per label, not a union of per-axis results) and with the single
+/// drawn slices of other axes written back, then painted in ascending label
+/// order. With one such axis and no other slices this is the interpolation
 /// along it; with none, the error names the axis with most drawn slices
 /// (ties: z, then y, then x).
 pub fn label_volume(
