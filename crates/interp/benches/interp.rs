@@ -1,7 +1,9 @@
 //! Interpolation speed: `shape-based` and the default method on a 256³ label
 //! volume drawn every 10th slice (k = 9 skipped), and every registered
 //! method on the 200³ phantom at k = 9; the combination of z and x slices
-//! (`multi_axis::combine`) of the 128³ phantom's cell, every 10th slice.
+//! (`multi_axis::combine`) of the 128³ phantom's cell, every 10th slice;
+//! `advise` (five suggestions) on a 256×256×60 block of the 256³ phantom
+//! drawn every 10th slice, shape-only and with the image.
 //!
 //! `cargo bench -p interslice-interp --bench interp`
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -96,5 +98,64 @@ fn bench_multi_axis_128(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_256, bench_phantom_200, bench_multi_axis_128);
+fn bench_advise_256x256x60(c: &mut Criterion) {
+    use interslice_core::Geometry;
+    use interslice_interp::advise::advise;
+    use std::sync::Arc;
+    let p = generate(&PhantomParams {
+        size: 256,
+        seed: 1,
+        bits: 8,
+        noise: 0.0,
+    })
+    .expect("phantom");
+    // 60 slices through the middle of the cell.
+    let (z0, nz, plane) = (98, 60, 256 * 256);
+    let block = |g: &Geometry| Geometry {
+        dims: [256, 256, nz],
+        ..g.clone()
+    };
+    let labels = p.labels.data()[z0 * plane..(z0 + nz) * plane].to_vec();
+    let labels = Volume::from_vec(block(p.labels.geometry()), labels).expect("block");
+    let interslice_core::AnyVolume::U8(image) = &p.intensity else {
+        panic!("an 8-bit phantom")
+    };
+    let image = image.map(f32::from);
+    let image = image.data()[z0 * plane..(z0 + nz) * plane].to_vec();
+    let image = Arc::new(Volume::from_vec(block(p.labels.geometry()), image).expect("block"));
+    let drawn: Vec<usize> = (0..nz).step_by(10).chain([nz - 1]).collect();
+    let mut sparse: LabelVolume = Volume::zeros(labels.geometry().clone());
+    for &d in &drawn {
+        sparse
+            .set_slice(Axis::Z, d, &labels.slice(Axis::Z, d).expect("in range"))
+            .expect("same");
+    }
+    let mut g = c.benchmark_group("advise_256x256x60_every_10th");
+    g.sample_size(10);
+    g.bench_function("shape-only", |b| {
+        b.iter(|| advise(black_box(&sparse), Axis::Z, &drawn, 5, None, None).expect("ok"))
+    });
+    g.bench_function("with-image", |b| {
+        b.iter(|| {
+            advise(
+                black_box(&sparse),
+                Axis::Z,
+                &drawn,
+                5,
+                None,
+                Some(image.clone()),
+            )
+            .expect("ok")
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    bench_256,
+    bench_phantom_200,
+    bench_multi_axis_128,
+    bench_advise_256x256x60
+);
 criterion_main!(benches);
