@@ -25,6 +25,8 @@ Install the comparison libraries with
 
 import argparse
 import contextlib
+import importlib.metadata
+import importlib.util
 import io
 import os
 import statistics
@@ -259,14 +261,44 @@ def sdf_blend(sparse_zyx, drawn, sp_zyx):
     return out
 
 
-def itk_mci(sparse_zyx):
-    import itk
-
-    img = itk.image_from_array(np.ascontiguousarray(sparse_zyx.astype(np.uint8)))
-    f = itk.MorphologicalContourInterpolator.New(img)
+#: Run in a child process by ``itk_mci``: the ``itk`` package and SimpleITK
+#: each carry their own copy of ITK, and the two in one process corrupt the
+#: heap when the interpreter exits.
+ITK_CHILD = """
+import statistics, sys, time
+import numpy as np
+import itk
+itk.MultiThreaderBase.SetGlobalDefaultNumberOfThreads(int(sys.argv[2]))
+a = np.load(sys.argv[1])
+ts = []
+for _ in range(int(sys.argv[3])):
+    t0 = time.perf_counter()
+    f = itk.MorphologicalContourInterpolator.New(itk.image_from_array(a))
     f.SetAxis(2)
     f.Update()
-    return itk.array_from_image(f.GetOutput()) != 0
+    out = itk.array_from_image(f.GetOutput()) != 0
+    ts.append(time.perf_counter() - t0)
+    if ts[0] > 60:
+        break
+np.save(sys.argv[1], out)
+print(statistics.median(ts))
+"""
+
+
+def itk_mci(sparse_zyx, reps):
+    """(median seconds, result) of ITK's morphological contour interpolation
+    along z, timed inside a child process (see ``ITK_CHILD``)."""
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "sparse.npy")
+        np.save(path, np.ascontiguousarray(sparse_zyx.astype(np.uint8)))
+        r = subprocess.run(
+            [sys.executable, "-c", ITK_CHILD, path, str(args.threads), str(reps)],
+            capture_output=True, text=True, check=True,
+        )
+        return float(r.stdout.split()[-1]), np.load(path)
 
 
 def dice(a, b):
@@ -292,9 +324,9 @@ def interpolation_section():
             t.add(f"interslice.interpolate ({name})", s, f"Dice {dice(out.T, truth):.4f}")
         else:
             t.add(f"interslice.interpolate ({name})", s, f"Dice {dice(out.T, truth):.4f}", base)
-    if optional("itk") is not None:
+    if importlib.util.find_spec("itk") is not None:
         try:
-            s, out = timed(lambda: itk_mci(sparse), args.reps)
+            s, out = itk_mci(sparse, args.reps)
             t.add("ITK MorphologicalContourInterpolator", s, f"Dice {dice(out, truth):.4f}", base)
         except Exception as e:  # noqa: BLE001
             print(f"  ITK morphological contour interpolation failed: {e}")
@@ -306,10 +338,12 @@ def interpolation_section():
 def main():
     want = set(args.only.split(",")) if args.only else {"distance", "overlap", "interpolation"}
     versions = {"interslice": interslice.__version__, "numpy": np.__version__}
-    for mod in ("SimpleITK", "itk", "torch", "monai", "medpy", "scipy"):
+    for mod in ("SimpleITK", "torch", "monai", "medpy", "scipy"):
         m = optional(mod)
         if m is not None:
             versions[mod] = getattr(m, "__version__", "?")
+    if importlib.util.find_spec("itk") is not None:
+        versions["itk"] = importlib.metadata.version("itk")
     print(f"threads {args.threads}, reps {args.reps}; " + ", ".join(f"{k} {v}" for k, v in versions.items()))
     print(f"load average at start {os.getloadavg()}")
     print("  row" + " " * 56 + "time      ratio   values (ratio = its time / interslice's)")
