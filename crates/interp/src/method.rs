@@ -93,6 +93,19 @@ pub trait Interpolator: Send + Sync {
     fn bounded_by_tracing(&self) -> bool {
         false
     }
+    /// The same method for a compact stack of the slices `real` along `axis`
+    /// (leave-one-out predicts a drawn slice from such a stack,
+    /// [`crate::loo::stack`]): `None` for the methods that read nothing but
+    /// the mask, used as they are; the image-aware method stacks its image
+    /// the same way.
+    fn for_stack(
+        &self,
+        axis: Axis,
+        real: &[usize],
+    ) -> Result<Option<Box<dyn Interpolator>>, InterpError> {
+        let _ = (axis, real);
+        Ok(None)
+    }
     /// The surface a mesh-based method builds from the drawn slices, in
     /// physical (x, y, z), before the drawn slices are restored (see
     /// [`crate::mesh`]); `Ok(None)` for the methods that work on voxels, whose

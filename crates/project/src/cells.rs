@@ -244,6 +244,9 @@ pub struct LoadedCell {
     pub counts: Vec<u64>,
     /// BLAKE3 of the dims and voxel bytes (detects a file changed under tracings).
     pub content_hash: String,
+    /// The voxels as `f32` for the image-guided method, made on its first use
+    /// (four bytes a voxel, so only cells interpolated with the image pay it).
+    intensity: std::sync::OnceLock<std::sync::Arc<Volume<f32>>>,
 }
 
 fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
@@ -354,7 +357,18 @@ impl LoadedCell {
             bin_width,
             counts,
             content_hash: h.finalize().to_hex().to_string(),
+            intensity: std::sync::OnceLock::new(),
         }
+    }
+
+    /// The intensities as `f32` (values unchanged), shared by every
+    /// image-guided interpolation of this cell.
+    pub fn intensity(&self) -> std::sync::Arc<Volume<f32>> {
+        self.intensity
+            .get_or_init(|| {
+                std::sync::Arc::new(interslice_interp::image::intensity_f32(&self.volume))
+            })
+            .clone()
     }
 
     /// "u8", "u16", "i16" or "f32".

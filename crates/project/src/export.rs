@@ -5,8 +5,8 @@
 use crate::cells::id_of_name;
 use crate::error::ProjectError;
 use crate::groundtruth::{GtCache, StoredTracing, label_volume, to_core};
-use crate::methods::method_by_name;
 use interslice_core::{Cancel, Geometry, LabelVolume, Mask};
+use interslice_interp::Interpolator;
 use interslice_store::{ContourQuery, ResultMeta, Role, Store, User};
 use std::sync::Arc;
 
@@ -22,7 +22,7 @@ pub fn export_bytes(
     geometry: &Geometry,
     user: &User,
     format: &str,
-    method: Option<&str>,
+    m: &dyn Interpolator,
     label: Option<u16>,
     cancel: &Cancel,
 ) -> Result<(Vec<u8>, String), ProjectError> {
@@ -32,15 +32,14 @@ pub fn export_bytes(
         return Ok((text.into_bytes(), format!("{base}.contours.json")));
     }
     let ext = volume_extension(format)?;
-    let m = method_by_name(method)?;
     let tracing = StoredTracing {
         store,
         cell,
         user_id: user.id,
     };
     let labels = match cache {
-        Some(c) => c.get(&tracing, geometry, m.as_ref(), label, cancel)?,
-        None => Arc::new(label_volume(&tracing, geometry, m.as_ref(), label, cancel)?),
+        Some(c) => c.get(&tracing, geometry, m, label, cancel)?,
+        None => Arc::new(label_volume(&tracing, geometry, m, label, cancel)?),
     };
     let name = format!("{base}.{ext}");
     let bytes = label_file_bytes(store, &labels, &name)?;

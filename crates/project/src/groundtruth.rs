@@ -148,6 +148,7 @@ pub fn sparse_mask(
 
 /// Which slices of one label along one axis to trace next, best first
 /// ([`interslice_interp::advise`]): the server's suggestion for the tracer.
+/// `image` (the cell's intensities) goes with the image-guided method.
 pub fn advise_label(
     tracing: &dyn Tracing,
     geometry: &Geometry,
@@ -155,6 +156,7 @@ pub fn advise_label(
     axis: Axis,
     count: usize,
     method: Option<&str>,
+    image: Option<Arc<Volume<f32>>>,
 ) -> Result<interslice_interp::advise::Advice, ProjectError> {
     let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
     let data = mask
@@ -164,7 +166,7 @@ pub fn advise_label(
         .collect();
     let sparse = LabelVolume::from_vec(geometry.clone(), data)?;
     Ok(interslice_interp::advise::advise(
-        &sparse, axis, &drawn, count, method, None,
+        &sparse, axis, &drawn, count, method, image,
     )?)
 }
 

@@ -38,7 +38,7 @@ use crate::sdf::signed_distance;
 use crate::slices::{Plane, assemble, bracket};
 use crate::{InterpError, Interpolator, SparseMask};
 use fuse::{Params, fuse};
-use interslice_core::{AnyVolume, Mask, Volume};
+use interslice_core::{AnyVolume, Axis, Mask, Volume};
 use model::{IntensityModel, blur};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -335,6 +335,15 @@ impl Interpolator for ImageGuided {
     ) -> Result<(Mask, Volume<f32>), InterpError> {
         let (m, c) = self.run(&input, true)?;
         Ok((m, c.expect("confidence requested")))
+    }
+
+    fn for_stack(
+        &self,
+        axis: Axis,
+        real: &[usize],
+    ) -> Result<Option<Box<dyn Interpolator>>, InterpError> {
+        let stacked = crate::loo::stack(&self.image, axis, real)?;
+        Ok(Some(Box::new(ImageGuided::new(Arc::new(stacked)))))
     }
 }
 

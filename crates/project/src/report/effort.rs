@@ -98,8 +98,11 @@ pub fn predicted_dice(
             let (w, h) = local.slice_shape(axis);
             local.set_slice(axis, at, &vec![false; w * h])?;
             let kept: Vec<usize> = (0..real.len()).filter(|&i| i != at).collect();
-            let out =
-                method.interpolate(SparseMask::new(&local, axis, &kept).with_cancel(cancel))?;
+            let stacked = method.for_stack(axis, &real)?;
+            let out = stacked
+                .as_deref()
+                .unwrap_or(method)
+                .interpolate(SparseMask::new(&local, axis, &kept).with_cancel(cancel))?;
             let truth = mask.slice(axis, drawn[p])?;
             let pred = out.slice(axis, at)?;
             let (mut wrong, mut sum) = (0u64, 0u64);

@@ -331,8 +331,8 @@ pub(super) async fn tracing_summary(
 ) -> Result<Json<TracingSummary>, ApiError> {
     let target = reader_target(&state, &me, q.user.as_deref())?;
     check_label(&state, q.label)?;
-    let method = method_by_name(q.method.as_deref())?;
     let c = state.cell(&cell).await?;
+    let method = method_for_cell(q.method.as_deref(), &c)?;
     let st = state.clone();
     let e = job(&state, move |cancel| {
         let g = c.volume.geometry();

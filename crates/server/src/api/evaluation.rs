@@ -1,5 +1,6 @@
 //! `POST /api/cells/{cell}/evaluate`: the metrics of one side against the other (a user's tracing, a file, a segmentation).
 use super::*;
+use interslice_interp::Interpolator;
 
 /// One side of an evaluation: a user's interpolated tracing, a file under the
 /// project folder, or a stored segmentation.
@@ -55,7 +56,7 @@ pub(super) fn resolve_source(
     geometry: &Geometry,
     src: &Source,
     label: u16,
-    method: Option<&str>,
+    m: &dyn Interpolator,
     cancel: &Cancel,
 ) -> Result<Arc<LabelVolume>, ApiError> {
     let given = [
@@ -75,7 +76,6 @@ pub(super) fn resolve_source(
         // A tracing is measured as the whole structure of `label` (the cell
         // with its nucleus inside, the nucleus with its nucleoli), not the
         // painted remainder: a threshold's foreground covers the whole cell.
-        let m = method_by_name(method)?;
         if u.eq_ignore_ascii_case(interslice_store::CONSENSUS) {
             // The STAPLE consensus of everyone's tracing (reviewers only).
             return Ok(Arc::new(interslice_project::consensus::consensus_for(
@@ -83,7 +83,7 @@ pub(super) fn resolve_source(
                 me,
                 geometry,
                 cell,
-                m.as_ref(),
+                m,
                 Some(label),
                 cancel,
             )?));
@@ -96,7 +96,7 @@ pub(super) fn resolve_source(
         };
         return Ok(state
             .gt_cache
-            .get(&tracing, geometry, m.as_ref(), Some(label), cancel)?);
+            .get(&tracing, geometry, m, Some(label), cancel)?);
     }
     let v = if let Some(p) = &src.path {
         let rel = safe_relative_path(p)?;
@@ -145,10 +145,11 @@ pub(super) async fn evaluate(
     ApiJson(body): ApiJson<EvaluateBody>,
 ) -> Result<Response, ApiError> {
     let c = state.cell(&cell).await?;
+    let method = method_for_cell(body.method.as_deref(), &c)?;
     let st = state.clone();
     let metrics = job(&state, move |cancel| {
         let g = c.volume.geometry();
-        let m = body.method.as_deref();
+        let m = method.as_ref();
         let r = resolve_source(&st, &me, &cell, g, &body.reference, body.label, m, cancel)?;
         let t = resolve_source(&st, &me, &cell, g, &body.test, body.label, m, cancel)?;
         cancel.check()?;

@@ -53,7 +53,7 @@ pub(super) async fn export(
             )?);
         }
         if consensus {
-            let m = method_by_name(q.method.as_deref())?;
+            let m = method_for_cell(q.method.as_deref(), &c)?;
             let g = c.volume.geometry();
             return Ok(interslice_project::consensus::export_bytes(
                 &st.store,
@@ -73,7 +73,7 @@ pub(super) async fn export(
             c.volume.geometry(),
             &target,
             &format,
-            q.method.as_deref(),
+            method_for_cell(q.method.as_deref(), &c)?.as_ref(),
             q.label,
             cancel,
         )?)

@@ -70,8 +70,8 @@ pub(super) async fn interpolate(
 ) -> Result<Json<InterpolateAnswer>, ApiError> {
     let axis = parse_axis(&body.axis)?;
     check_label(&state, body.label)?;
-    let method = method_by_name(body.method.as_deref())?;
     let c = state.cell(&cell).await?;
+    let method = method_for_cell(body.method.as_deref(), &c)?;
     let st = state.clone();
     let answer = job(&state, move |cancel| {
         let g = c.volume.geometry().clone();
@@ -264,9 +264,11 @@ pub(super) async fn advice(
     let axis = parse_axis(q.axis.as_deref().unwrap_or("z"))?;
     check_label(&state, q.label)?;
     let count = crate::limits::advice_count(q.count.unwrap_or(3))?;
-    // The method is checked here so a bad name is a 400 before any work.
-    method_by_name(q.method.as_deref())?;
     let c = state.cell(&cell).await?;
+    // The method is checked here so a bad name is a 400 before any work.
+    method_for_cell(q.method.as_deref(), &c)?;
+    let image =
+        (q.method.as_deref() == Some(interslice_interp::IMAGE_METHOD)).then(|| c.intensity());
     let st = state.clone();
     let advice = job(&state, move |cancel| {
         cancel.check()?;
@@ -282,6 +284,7 @@ pub(super) async fn advice(
             axis,
             count,
             q.method.as_deref(),
+            image,
         )?)
     })
     .await?;

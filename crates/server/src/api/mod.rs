@@ -12,7 +12,7 @@ use interslice_core::{AnyVolume, Axis, Cancel, Geometry, LabelVolume};
 use interslice_project::cells::{LoadedCell, safe_relative_path};
 use interslice_project::export::readable_result;
 use interslice_project::groundtruth;
-use interslice_project::methods::method_by_name;
+use interslice_project::methods::method_for_cell;
 use interslice_store::{CellStatus, ContourQuery, NewContour, SliceKey, StoredContour, User};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;

@@ -293,9 +293,10 @@ pub(super) async fn overlay(
             segmentation: Some(q.segmentation.clone()),
             ..Default::default()
         };
-        let method = q.method.as_deref();
-        let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, method, cancel)?;
-        let seg = resolve_source(&st, &me, &cell, g, &test, q.label, None, cancel)?;
+        let method = method_for_cell(q.method.as_deref(), &c)?;
+        let m = method.as_ref();
+        let gt = resolve_source(&st, &me, &cell, g, &reference, q.label, m, cancel)?;
+        let seg = resolve_source(&st, &me, &cell, g, &test, q.label, m, cancel)?;
         let a = gt.slice(axis, index)?;
         let b = seg.slice(axis, index)?;
         let bytes: Vec<u8> = a
