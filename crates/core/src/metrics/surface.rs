@@ -24,6 +24,7 @@
 //!   allocated.
 use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
+use super::disc::{Disc, GROUP};
 use super::stats::percentile;
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
@@ -79,8 +80,10 @@ impl BorderFlags {
     }
 }
 
-/// Integer z distances of the first pass: `u16` for up to 65 534 slices (2 bytes
-/// a voxel), `u32` beyond.
+/// Integer z distances of the first pass: `i16` for up to 32 765 slices (2
+/// bytes a voxel; signed, because x86-64's baseline vector instructions have
+/// a signed 16-bit minimum and no unsigned one), `u32` beyond. `u16` serves
+/// the tests.
 trait ZDist: Copy + Send + Sync + Ord {
     const NONE: Self;
     const ZERO: Self;
@@ -101,11 +104,13 @@ macro_rules! zdist {
             }
             #[inline]
             fn index(self) -> usize {
+                // Counts are never negative.
                 self as usize
             }
         }
     };
 }
+zdist!(i16);
 zdist!(u16);
 zdist!(u32);
 
@@ -113,15 +118,16 @@ zdist!(u32);
 /// slab by slab, row by row, ascending x. Every value is `+∞` when no voxel is
 /// flagged `to`.
 fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
-    if flags.dims[2] < u16::MAX as usize - 1 {
-        directed_with::<u16>(flags, from, to, spacing, SEARCH_BUDGET)
+    if flags.dims[2] < i16::MAX as usize - 1 {
+        directed_with::<i16>(flags, from, to, spacing, SEARCH_BUDGET)
     } else {
         directed_with::<u32>(flags, from, to, spacing, SEARCH_BUDGET)
     }
 }
 
 /// [`directed`] with slice counts of type `Z`; the direct search of a slab
-/// gives up after `budget` cells per voxel of the slab.
+/// gives up after `budget` cells per voxel of the slab. Each slab writes its
+/// distances into its own part of the output, sized by a first count.
 fn directed_with<Z: ZDist>(
     flags: &BorderFlags,
     from: u8,
@@ -134,6 +140,20 @@ fn directed_with<Z: ZDist>(
     if plane * cz == 0 {
         return Vec::new();
     }
+    let counts: Vec<usize> = flags
+        .bits
+        .par_chunks(plane)
+        .map(|s| s.iter().map(|&b| usize::from(b & from != 0)).sum())
+        .collect();
+    // Zeroed (not filled) memory: every slab writes its whole part.
+    let mut out = vec![0.0; counts.iter().sum()];
+    let mut parts = Vec::with_capacity(cz);
+    let mut rest = out.as_mut_slice();
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(n);
+        parts.push(head);
+        rest = tail;
+    }
     let zd = z_pass::<Z>(flags, to);
     let [sx, sy, sz] = spacing;
     // (sz · slices)² for every count a column can hold, then +∞ for `NONE`.
@@ -144,17 +164,16 @@ fn directed_with<Z: ZDist>(
         })
         .chain([f64::INFINITY])
         .collect();
-    let per_slab: Vec<Vec<f64>> = flags
-        .bits
-        .par_chunks(plane)
+    let disc = Disc::new(cx, cy, sx * sx, sy * sy);
+    parts
+        .into_par_iter()
+        .zip(flags.bits.par_chunks(plane))
         .zip(zd.par_chunks(plane))
-        .map_init(
+        .filter(|((part, _), _)| !part.is_empty())
+        .for_each_init(
             || SlabScratch::new(cx, cy),
-            |sc, (fs, zs)| {
+            |sc, ((part, fs), zs)| {
                 sc.find_queries(fs, cx, from);
-                if sc.rows.is_empty() {
-                    return Vec::new();
-                }
                 let slab = Slab {
                     zs,
                     cx,
@@ -163,13 +182,14 @@ fn directed_with<Z: ZDist>(
                     sx2: sx * sx,
                     sy2: sy * sy,
                     inv_sx2: 1.0 / (sx * sx),
+                    disc: &disc,
                 };
-                sc.search(&slab, budget.saturating_mul(plane))
-                    .unwrap_or_else(|| sc.envelopes(&slab))
+                if !sc.search(&slab, budget.saturating_mul(plane), part) {
+                    sc.envelopes(&slab, part);
+                }
             },
-        )
-        .collect();
-    per_slab.concat()
+        );
+    out
 }
 
 /// One slab of the z pass's slice counts and what turns them into squared
@@ -187,9 +207,54 @@ struct Slab<'a, Z> {
     sy2: f64,
     /// `1 / sx2`, for the search's window widths (which have a step to spare).
     inv_sx2: f64,
+    /// The cell offsets the search visits first.
+    disc: &'a Disc,
 }
 
 impl<Z: ZDist> Slab<'_, Z> {
+    /// [`Slab::nearest`] by the cells of the disc, nearest first, a group of
+    /// [`GROUP`] at a time (independent of each other, so they overlap in the
+    /// processor) while the group's first can beat the best value so far;
+    /// past the disc (a value beyond its limit), by [`Slab::nearest`].
+    #[inline]
+    fn nearest_disc(&self, px: usize, py: usize, budget: &mut usize) -> Option<f64> {
+        let mut best = f64::INFINITY;
+        let at = py * self.cx + px;
+        let last = self.heights.len() - 1;
+        let mut visited = 0;
+        for group in self.disc.groups() {
+            if group[0].lb >= best {
+                break;
+            }
+            visited += GROUP;
+            let m = group
+                .iter()
+                .map(|c| {
+                    let i = px.wrapping_add_signed(c.d[0] as isize);
+                    let j = py.wrapping_add_signed(c.d[1] as isize);
+                    let inside = i < self.cx && j < self.cy;
+                    // Outside the slab reads the count of the voxel itself
+                    // and maps it to the infinite height.
+                    let z = self.zs[if inside {
+                        at.wrapping_add_signed(c.lin)
+                    } else {
+                        at
+                    }];
+                    let z = if inside { z.index().min(last) } else { last };
+                    c.x + (c.fy + self.heights[z])
+                })
+                .fold(f64::INFINITY, |m, v| if v < m { v } else { m });
+            if m < best {
+                best = m;
+            }
+        }
+        *budget = budget.checked_sub(visited)?;
+        if best > self.disc.limit {
+            return self.nearest(px, py, budget);
+        }
+        Some(best)
+    }
+
     /// The squared distance from voxel `(px, py)` to the nearest flagged voxel:
     /// rows are visited outward from `py` and each row outward from `px`,
     /// skipping every cell whose `sx²·Δi² + sy²·Δj²` alone reaches the best
@@ -286,35 +351,45 @@ impl SlabScratch {
         }
     }
 
-    /// The voxels flagged `from` in slab `fs` (`[j][i]`), row by row.
+    /// The voxels flagged `from` (one bit) in slab `fs` (`[j][i]`), row by
+    /// row: eight flags at a time as one word, then its set bits.
     fn find_queries(&mut self, fs: &[u8], cx: usize, from: u8) {
+        debug_assert_eq!(from.count_ones(), 1);
         self.queries.clear();
         self.rows.clear();
+        let rep = u64::from(from) * 0x0101_0101_0101_0101;
         for (j, row) in fs.chunks_exact(cx).enumerate() {
             let start = self.queries.len();
-            self.queries.extend(
-                row.iter()
-                    .enumerate()
-                    .filter(|(_, f)| **f & from != 0)
-                    .map(|(i, _)| i),
-            );
+            for (c, run) in row.chunks(8).enumerate() {
+                let mut w = [0u8; 8];
+                w[..run.len()].copy_from_slice(run);
+                // At most one bit a byte: each step clears one voxel.
+                let mut x = u64::from_le_bytes(w) & rep;
+                while x != 0 {
+                    self.queries.push(c * 8 + x.trailing_zeros() as usize / 8);
+                    x &= x - 1;
+                }
+            }
             if self.queries.len() > start {
                 self.rows.push((j, start, self.queries.len()));
             }
         }
     }
 
-    /// Distances at the query voxels by a direct search around each of them,
-    /// or `None` when the searches would visit more than `budget` cells
-    /// (far-apart borders): then the envelopes cost less.
-    fn search<Z: ZDist>(&self, slab: &Slab<'_, Z>, mut budget: usize) -> Option<Vec<f64>> {
-        let mut out = Vec::with_capacity(self.queries.len());
+    /// Distances at the query voxels into `out` by a direct search around
+    /// each of them; false when the searches would visit more than `budget`
+    /// cells (far-apart borders): then the envelopes cost less.
+    fn search<Z: ZDist>(&self, slab: &Slab<'_, Z>, mut budget: usize, out: &mut [f64]) -> bool {
+        let mut o = out.iter_mut();
         for &(j, s, e) in &self.rows {
-            for &p in &self.queries[s..e] {
-                out.push(slab.nearest(p, j, &mut budget)?.sqrt());
+            for (&p, d) in self.queries[s..e].iter().zip(&mut o) {
+                match slab.nearest_disc(p, j, &mut budget) {
+                    Some(v) => *d = v.sqrt(),
+                    None => return false,
+                }
             }
         }
-        Some(out)
+        true
     }
 
     /// Distances at the query voxels by the last two passes of the separable
@@ -323,7 +398,7 @@ impl SlabScratch {
     /// [`BLOCK`] at a time into `cols`, so that both the reads and the
     /// envelope's input are contiguous. The x pass builds the envelope of every
     /// query row and evaluates it at the query voxels.
-    fn envelopes<Z: ZDist>(&mut self, slab: &Slab<'_, Z>) -> Vec<f64> {
+    fn envelopes<Z: ZDist>(&mut self, slab: &Slab<'_, Z>, out: &mut [f64]) {
         let SlabScratch {
             queries,
             rows,
@@ -366,12 +441,15 @@ impl SlabScratch {
             }
             i0 += w;
         }
-        let mut out = Vec::with_capacity(queries.len());
         for (r, &(_, s, e)) in rows.iter().enumerate() {
             env.build(&g[r * cx..(r + 1) * cx], sx2);
-            env.evaluate_sorted(queries[s..e].iter().copied(), |_, d2| out.push(d2.sqrt()));
+            let mut o = out[s..e].iter_mut();
+            env.evaluate_sorted(queries[s..e].iter().copied(), |_, d2| {
+                if let Some(d) = o.next() {
+                    *d = d2.sqrt();
+                }
+            });
         }
-        out
     }
 }
 
