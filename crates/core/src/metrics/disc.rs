@@ -9,8 +9,8 @@
 //! few dozen cells a query, read from a precomputed table rather than found
 //! row by row.
 
-/// Most cells of a [`Disc`]: about a disc of 30 voxels' radius.
-const MAX_CELLS: f64 = 3000.0;
+/// About the most cells of a [`Disc`]: a disc of 30 voxels' radius.
+pub(super) const MAX_CELLS: f64 = 3000.0;
 
 /// Cells the search visits together: it checks its bound once a group.
 pub(super) const GROUP: usize = 4;
@@ -41,9 +41,10 @@ pub(super) struct Disc {
 }
 
 impl Disc {
-    /// The disc for slabs of `cx × cy` cells of spacing² `sx2 × sy2`.
-    pub(super) fn new(cx: usize, cy: usize, sx2: f64, sy2: f64) -> Disc {
-        let limit = MAX_CELLS * (sx2 * sy2).sqrt() / std::f64::consts::PI;
+    /// The disc of about `max_cells` cells for slabs of `cx × cy` cells of
+    /// spacing² `sx2 × sy2`.
+    pub(super) fn new(cx: usize, cy: usize, sx2: f64, sy2: f64, max_cells: f64) -> Disc {
+        let limit = max_cells * (sx2 * sy2).sqrt() / std::f64::consts::PI;
         let mut cells = Vec::new();
         for b in 0..cy {
             let fy = sy2 * b as f64 * b as f64;

@@ -255,6 +255,32 @@ mod tests {
         }
     }
 
+    /// Runs longer than a lane flush and a parallel chunk, all foreground
+    /// (every lane counter at its limit) or patterned, against a naive count.
+    #[test]
+    fn lane_counters_flush_before_overflow() {
+        let n = CHUNK + LANES * 255 * 2 + 37;
+        let ones = vec![1u8; n];
+        assert_eq!(
+            confusion_of(&ones, &ones, 1),
+            Confusion::from_counts(n as u64, n as u64, n as u64, n as u64)
+        );
+        let a: Vec<u8> = (0..n).map(|i| u8::from((i * 7919) % 5 < 2)).collect();
+        let b: Vec<u8> = (0..n).map(|i| u8::from((i * 104_729) % 3 == 0)).collect();
+        let count = |f: &dyn Fn(usize) -> bool| (0..n).filter(|&i| f(i)).count() as u64;
+        let want = Confusion::from_counts(
+            n as u64,
+            count(&|i| a[i] == 1),
+            count(&|i| b[i] == 1),
+            count(&|i| a[i] == 1 && b[i] == 1),
+        );
+        assert_eq!(confusion_of(&a, &b, 1), want);
+        assert_eq!(
+            confusion_of(&a[..LANES * 255 + 31], &b[..LANES * 255 + 31], 1).total(),
+            (LANES * 255 + 31) as u64
+        );
+    }
+
     #[test]
     fn ratios_and_empty_rules() {
         let c = Confusion {

@@ -24,7 +24,7 @@
 //!   allocated.
 use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
-use super::disc::{Disc, GROUP};
+use super::disc::{Disc, GROUP, MAX_CELLS};
 use super::stats::percentile;
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
@@ -114,26 +114,82 @@ zdist!(i16);
 zdist!(u16);
 zdist!(u32);
 
+/// The slice counts of [`z_pass`], kept from one direction to the next (at
+/// 512³ a fresh array would cost a quarter of a GiB of page faults).
+#[derive(Default)]
+struct ZScratch {
+    small: Vec<i16>,
+    wide: Vec<u32>,
+}
+
 /// Distances from the voxels flagged `from` to the nearest voxel flagged `to`,
 /// slab by slab, row by row, ascending x. Every value is `+∞` when no voxel is
-/// flagged `to`.
-fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+/// flagged `to`. `zs` keeps the slice counts' memory for the next call.
+fn directed_reusing(
+    flags: &BorderFlags,
+    from: u8,
+    to: u8,
+    spacing: [f64; 3],
+    zs: &mut ZScratch,
+) -> Vec<f64> {
     if flags.dims[2] < i16::MAX as usize - 1 {
-        directed_with::<i16>(flags, from, to, spacing, SEARCH_BUDGET)
+        directed_in(
+            flags,
+            [from, to],
+            spacing,
+            SEARCH_BUDGET,
+            MAX_CELLS,
+            &mut zs.small,
+        )
     } else {
-        directed_with::<u32>(flags, from, to, spacing, SEARCH_BUDGET)
+        directed_in(
+            flags,
+            [from, to],
+            spacing,
+            SEARCH_BUDGET,
+            MAX_CELLS,
+            &mut zs.wide,
+        )
     }
 }
 
-/// [`directed`] with slice counts of type `Z`; the direct search of a slab
-/// gives up after `budget` cells per voxel of the slab. Each slab writes its
-/// distances into its own part of the output, sized by a first count.
+/// [`directed_reusing`] with fresh slice counts.
+#[cfg(test)]
+fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+    directed_reusing(flags, from, to, spacing, &mut ZScratch::default())
+}
+
+/// [`directed_in`] with fresh slice counts.
+#[cfg(test)]
 fn directed_with<Z: ZDist>(
     flags: &BorderFlags,
     from: u8,
     to: u8,
     spacing: [f64; 3],
     budget: usize,
+) -> Vec<f64> {
+    directed_in::<Z>(
+        flags,
+        [from, to],
+        spacing,
+        budget,
+        MAX_CELLS,
+        &mut Vec::new(),
+    )
+}
+
+/// [`directed_reusing`] from the voxels flagged `from` to those flagged `to`, with
+/// slice counts of type `Z` in `zd`, a [`Disc`] of about `disc_cells` cells;
+/// the direct search of a slab gives up after `budget` cells per voxel of the
+/// slab. Each slab writes its distances into its own part of the output,
+/// sized by a first count.
+fn directed_in<Z: ZDist>(
+    flags: &BorderFlags,
+    [from, to]: [u8; 2],
+    spacing: [f64; 3],
+    budget: usize,
+    disc_cells: f64,
+    zd: &mut Vec<Z>,
 ) -> Vec<f64> {
     let [cx, cy, cz] = flags.dims;
     let plane = cx * cy;
@@ -143,7 +199,7 @@ fn directed_with<Z: ZDist>(
     let counts: Vec<usize> = flags
         .bits
         .par_chunks(plane)
-        .map(|s| s.iter().map(|&b| usize::from(b & from != 0)).sum())
+        .map(|s| count_flagged(s, from))
         .collect();
     // Zeroed (not filled) memory: every slab writes its whole part.
     let mut out = vec![0.0; counts.iter().sum()];
@@ -154,7 +210,7 @@ fn directed_with<Z: ZDist>(
         parts.push(head);
         rest = tail;
     }
-    let zd = z_pass::<Z>(flags, to);
+    z_pass::<Z>(flags, to, zd);
     let [sx, sy, sz] = spacing;
     // (sz · slices)² for every count a column can hold, then +∞ for `NONE`.
     let heights: Vec<f64> = (0..cz)
@@ -164,7 +220,7 @@ fn directed_with<Z: ZDist>(
         })
         .chain([f64::INFINITY])
         .collect();
-    let disc = Disc::new(cx, cy, sx * sx, sy * sy);
+    let disc = Disc::new(cx, cy, sx * sx, sy * sy, disc_cells);
     parts
         .into_par_iter()
         .zip(flags.bits.par_chunks(plane))
@@ -190,6 +246,26 @@ fn directed_with<Z: ZDist>(
             },
         );
     out
+}
+
+/// Voxels of `bits` with `bit` (one bit) set: `u8` lane counters, flushed
+/// before they could overflow, so the loop runs on whole vector registers.
+fn count_flagged(bits: &[u8], bit: u8) -> usize {
+    const LANES: usize = 32;
+    let shift = bit.trailing_zeros();
+    let mut n = 0;
+    for block in bits.chunks(LANES * 255) {
+        let mut lanes = [0u8; LANES];
+        let runs = block.chunks_exact(LANES);
+        n += runs.remainder().iter().filter(|&&f| f & bit != 0).count();
+        for run in runs {
+            for (l, &f) in lanes.iter_mut().zip(run) {
+                *l += (f >> shift) & 1;
+            }
+        }
+        n += lanes.iter().map(|&l| usize::from(l)).sum::<usize>();
+    }
+    n
 }
 
 /// One slab of the z pass's slice counts and what turns them into squared
@@ -458,11 +534,13 @@ impl SlabScratch {
 /// in the flags' layout (x fastest). Tasks own the same run of [`Z_RUN`]
 /// positions in every slab and sweep it forward then backward along k: whole
 /// contiguous runs at a time, which the compiler vectorises.
-fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
+fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8, zd: &mut Vec<Z>) {
     let [cx, cy, cz] = flags.dims;
     let plane = cx * cy;
-    // Zeroed (not filled) memory: the forward sweep writes every voxel.
-    let mut zd = vec![Z::ZERO; plane * cz];
+    if zd.len() != plane * cz {
+        // Zeroed (not filled) memory: the forward sweep writes every voxel.
+        *zd = vec![Z::ZERO; plane * cz];
+    }
     let nruns = plane.div_ceil(Z_RUN);
     let mut runs: Vec<Vec<&mut [Z]>> = (0..nruns).map(|_| Vec::with_capacity(cz)).collect();
     for slab in zd.chunks_mut(plane) {
@@ -496,7 +574,6 @@ fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
             }
         }
     });
-    zd
 }
 
 /// Summary of one direction's distances.
@@ -586,8 +663,10 @@ pub(super) fn add_distances<G: MaskView, S: MaskView>(
         return;
     };
     let flags = BorderFlags::new(gt, seg, bb);
-    let mut gs = directed(&flags, GT_BIT, SEG_BIT, spacing);
-    let mut sg = directed(&flags, SEG_BIT, GT_BIT, spacing);
+    let mut zs = ZScratch::default();
+    let mut gs = directed_reusing(&flags, GT_BIT, SEG_BIT, spacing, &mut zs);
+    let mut sg = directed_reusing(&flags, SEG_BIT, GT_BIT, spacing, &mut zs);
+    drop(zs);
     m.border_gt = gs.len() as u64;
     m.border_seg = sg.len() as u64;
     if gs.is_empty() || sg.is_empty() {
@@ -694,6 +773,73 @@ mod tests {
                 prop_assert!(same(&wide, &want));
                 prop_assert_eq!(&directed(&f, from, to, s), &wide);
             }
+        }
+
+        /// Every disc size (down to one cell, when the row search takes over
+        /// past the disc) and every count type give the same values, equal
+        /// to brute force, on boxes wider than a run of eight flags.
+        #[test]
+        fn disc_sizes_and_count_types_agree((f, s) in wide_flags(), cells in 0.5f64..60.0) {
+            for (from, to) in [(GT_BIT, SEG_BIT), (SEG_BIT, GT_BIT)] {
+                let want = brute(&f, from, to, s);
+                let full = directed_in::<i16>(&f, [from, to], s, usize::MAX, MAX_CELLS, &mut Vec::new());
+                prop_assert!(same(&full, &want), "{full:?} vs {want:?}");
+                for z in [directed_in::<i16>(&f, [from, to], s, usize::MAX, cells, &mut Vec::new()),
+                          directed_in::<u32>(&f, [from, to], s, usize::MAX, cells, &mut Vec::new()),
+                          directed_in::<u16>(&f, [from, to], s, usize::MAX, 1.0, &mut Vec::new())] {
+                    prop_assert_eq!(&z, &full);
+                }
+                // Both directions through one scratch, as `add_distances` runs them.
+                let mut zs = ZScratch::default();
+                let a = directed_reusing(&f, from, to, s, &mut zs);
+                let b = directed_reusing(&f, to, from, s, &mut zs);
+                prop_assert_eq!(&a, &full);
+                prop_assert_eq!(b, directed_with::<u32>(&f, to, from, s, usize::MAX));
+            }
+        }
+    }
+
+    /// Boxes up to 40 wide and tall, a few slabs, flags of varying density.
+    fn wide_flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
+        (
+            1usize..40,
+            1usize..40,
+            1usize..5,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.02f64..0.5,
+        )
+            .prop_flat_map(|(x, y, z, a, b, c, p)| {
+                (
+                    Just([x, y, z]),
+                    proptest::collection::vec(0u8..4, x * y * z),
+                    proptest::collection::vec(proptest::bool::weighted(p), x * y * z),
+                    Just([a, b, c]),
+                )
+            })
+            .prop_map(|(dims, bits, keep, s)| {
+                let bits = bits
+                    .iter()
+                    .zip(&keep)
+                    .map(|(&b, &k)| if k { b } else { 0 })
+                    .collect();
+                (BorderFlags { dims, bits }, s)
+            })
+    }
+
+    #[test]
+    fn flag_counts_cross_their_flush() {
+        let bits: Vec<u8> = (0..20_000usize)
+            .map(|n| ((n * 7919) % 4) as u8 | u8::from(n < 9000))
+            .collect();
+        for bit in [GT_BIT, SEG_BIT] {
+            let want = bits.iter().filter(|&&b| b & bit != 0).count();
+            assert_eq!(count_flagged(&bits, bit), want);
+            assert_eq!(
+                count_flagged(&bits[..31], bit),
+                bits[..31].iter().filter(|&&b| b & bit != 0).count()
+            );
         }
     }
 }
