@@ -10,22 +10,27 @@
 //! * The border voxels of both masks are found once, in one parallel pass that
 //!   stores two bits a voxel; both directions then read those bits.
 //! * The transform is separable: a z pass counts, in every column, the slices to
-//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps). The
-//!   squared distance from a voxel to B is then the least
-//!   `sx²·Δi² + sy²·Δj² + (sz·count)²` over its slab.
+//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps; one
+//!   array reused by both directions). The squared distance from a voxel to B
+//!   is then the least `sx²·Δi² + (sy²·Δj² + (sz·count)²)` over its slab.
 //! * Borders being compared are usually close, so that least value is searched
-//!   for directly around each border voxel of A, outward, skipping every cell
-//!   that cannot beat the best so far: a few dozen cells a voxel. A slab whose
-//!   searches grow too long (far-apart borders) runs the last two passes of the
-//!   separable transform instead (Felzenszwalb–Huttenlocher, [`crate::edt`]):
-//!   envelopes along y evaluated only on the rows that hold border voxels of A,
-//!   then along those rows evaluated only at those voxels. Both ways compute the
-//!   same sums in the same order, and no full-size floating-point array is ever
-//!   allocated.
+//!   for directly around each border voxel of A: the cells of the slab are
+//!   visited from a table sorted by `sx²·Δi² + sy²·Δj²` ([`super::disc`]), four
+//!   at a time, until that lower bound reaches the best value so far; a few
+//!   dozen cells a voxel on dense, close borders. Past the table the search
+//!   goes on row by row outward, skipping every cell that cannot beat the best
+//!   so far. A slab whose searches grow too long (far-apart borders) runs the
+//!   last two passes of the separable transform instead
+//!   (Felzenszwalb–Huttenlocher, [`crate::edt`]): envelopes along y evaluated
+//!   only on the rows that hold border voxels of A, then along those rows
+//!   evaluated only at those voxels. Every way computes the same sums in the
+//!   same order (the two searches take the least of the very same values),
+//!   and no full-size floating-point array is ever allocated: each slab writes
+//!   its distances into its part of one output array.
 use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
 use super::disc::{Disc, GROUP, MAX_CELLS};
-use super::stats::percentile;
+use super::stats::{percentile, summarise};
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
 
@@ -574,77 +579,6 @@ fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8, zd: &mut Vec<Z>) {
             }
         }
     });
-}
-
-/// Summary of one direction's distances.
-struct Directed {
-    n: usize,
-    max: Option<f64>,
-    mean: Option<f64>,
-    p95: Option<f64>,
-    sum: f64,
-    within: usize,
-}
-
-/// Distances summed per chunk of this many, then the chunks in order: the same
-/// distances give the same sums whatever the threads do.
-const SUM_CHUNK: usize = 1 << 14;
-
-/// A compensated (Neumaier) running sum: millions of distances add up to
-/// their sum correctly rounded in all but rare cases, in a fixed order.
-#[derive(Clone, Copy, Default)]
-struct Sum {
-    s: f64,
-    c: f64,
-}
-
-impl Sum {
-    #[inline]
-    fn add(self, x: f64) -> Sum {
-        let t = self.s + x;
-        let c = if self.s.abs() >= x.abs() {
-            (self.s - t) + x
-        } else {
-            (x - t) + self.s
-        };
-        Sum {
-            s: t,
-            c: self.c + c,
-        }
-    }
-
-    fn total(self) -> f64 {
-        self.s + self.c
-    }
-}
-
-fn summarise(d: &mut [f64], tol: f64) -> Directed {
-    let n = d.len();
-    // Distances equal to the tolerance up to rounding count as within it.
-    let limit = tol * (1.0 + 1e-12);
-    let parts: Vec<(Sum, f64, usize)> = d
-        .par_chunks(SUM_CHUNK)
-        .map(|c| {
-            c.iter()
-                .fold((Sum::default(), f64::NEG_INFINITY, 0), |(s, m, w), &x| {
-                    (s.add(x), m.max(x), w + usize::from(x <= limit))
-                })
-        })
-        .collect();
-    let sum = parts
-        .iter()
-        .fold(Sum::default(), |a, p| a.add(p.0.s).add(p.0.c))
-        .total();
-    let max = (n > 0).then(|| parts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
-    let within = parts.iter().map(|p| p.2).sum();
-    Directed {
-        n,
-        max,
-        mean: (n > 0).then(|| sum / n as f64),
-        p95: percentile(d, 95.0),
-        sum,
-        within,
-    }
 }
 
 /// The border counts and every border-distance statistic of `gt` and `seg`
