@@ -8,6 +8,10 @@ against the reference's.
 
 Arrays are uint8 ``[z, y, x]`` (SimpleITK's order), spacing (x, y, z) =
 (0.35, 0.35, 0.5) µm, with an empty 2-voxel margin.
+
+``python blobs.py DIR`` writes them as NIfTI (needs the interslice package);
+``--raw`` also writes ``blob{n}_{gt,pred}.u8``, the bare voxels with x fastest,
+which the criterion benchmarks of interslice-core read (``INTERSLICE_BLOBS=DIR``).
 """
 
 import hashlib
