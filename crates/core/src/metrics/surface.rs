@@ -299,8 +299,12 @@ impl<Z: ZDist> Slab<'_, Z> {
     /// past the disc (a value beyond its limit), by [`Slab::nearest`].
     #[inline]
     fn nearest_disc(&self, px: usize, py: usize, budget: &mut usize) -> Option<f64> {
-        let mut best = f64::INFINITY;
         let at = py * self.cx + px;
+        if self.zs[at] == Z::ZERO {
+            // The voxel itself is flagged: `heights[0]` is 0, the least of all.
+            return Some(self.heights[0]);
+        }
+        let mut best = f64::INFINITY;
         let last = self.heights.len() - 1;
         let mut visited = 0;
         for group in self.disc.groups() {
