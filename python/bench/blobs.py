@@ -8,6 +8,10 @@ against the reference's.
 
 Arrays are uint8 ``[z, y, x]`` (SimpleITK's order), spacing (x, y, z) =
 (0.35, 0.35, 0.5) µm, with an empty 2-voxel margin.
+
+``python blobs.py DIR`` writes them as NIfTI (needs the interslice package);
+``--raw`` also writes ``blob{n}_{gt,pred}.u8``, the bare voxels with x fastest,
+which the criterion benchmarks of interslice-core read (``INTERSLICE_BLOBS=DIR``).
 """
 
 import hashlib
@@ -77,16 +81,39 @@ if __name__ == "__main__":
     import argparse
     import os
 
-    import interslice
-
-    ap = argparse.ArgumentParser(description="write the blob pairs as NIfTI (for `interslice evaluate` and criterion)")
-    ap.add_argument("out", help="folder to write blob{n}_{gt,pred}.nii.gz into")
+    ap = argparse.ArgumentParser(
+        description="write the blob pairs as NIfTI (for `interslice evaluate`) and, with --raw, "
+        "as raw bytes (for the criterion benchmarks of interslice-core)"
+    )
+    ap.add_argument("out", help="folder to write blob{n}_{gt,pred}.nii.gz (and .u8) into")
     ap.add_argument("--sizes", default="256,512")
+    ap.add_argument(
+        "--raw",
+        action="store_true",
+        help="also write blob{n}_{gt,pred}.u8: the n³ voxels as uint8, x fastest (the NIfTI "
+        "voxel order); without the interslice package installed, only these are written",
+    )
     args = ap.parse_args()
+    try:
+        import interslice
+    except ImportError:
+        if not args.raw:
+            raise
+        interslice = None
+        print("interslice is not installed: writing the raw files only")
     os.makedirs(args.out, exist_ok=True)
     for n in (int(s) for s in args.sizes.split(",")):
         g, p = checked_pair(n)
         for role, a in (("gt", g), ("pred", p)):
-            path = os.path.join(args.out, f"blob{n}_{role}.nii.gz")
-            interslice.write(path, a.T, {"spacing": SPACING_XYZ, "unit": "µm"})
-            print(path, sha256_u8(a))
+            if interslice is not None:
+                path = os.path.join(args.out, f"blob{n}_{role}.nii.gz")
+                interslice.write(path, a.T, {"spacing": SPACING_XYZ, "unit": "µm"})
+                print(path, sha256_u8(a))
+            if args.raw:
+                # [z, y, x] C order is x fastest: the bytes as they are.
+                path = os.path.join(args.out, f"blob{n}_{role}.u8")
+                tmp = path + ".part"
+                with open(tmp, "wb") as f:
+                    f.write(np.ascontiguousarray(a, dtype=np.uint8).tobytes())
+                os.replace(tmp, path)
+                print(path, sha256_u8(a))

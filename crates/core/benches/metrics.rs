@@ -2,10 +2,17 @@
 //! one-pass read of both arrays (the floor any overlap metric can reach), the
 //! full metrics (HD95, ASSD, ...) on a 256³ and a 512³ pair, and the exact EDT
 //! on 256³.
-//! Run with `cargo bench -p interslice-core --bench metrics`.
+//!
+//! The `blob_*` groups run on the irregular blob pairs of
+//! `python/bench/blobs.py` (dense borders, about a tenth of the voxels, close
+//! to each other), as written by `blobs.py --raw DIR`: uint8, x fastest,
+//! spacing 0.35 × 0.35 × 0.5 µm. Set `INTERSLICE_BLOBS=DIR` to run them;
+//! without it they are skipped.
+//! Run with `cargo bench -p interslice-core --bench metrics` (add `-- blob` for
+//! the blob groups only).
 use criterion::{Criterion, criterion_group, criterion_main};
 use interslice_core::edt::{squared_edt_3d, squared_edt_3d_f32};
-use interslice_core::metrics::{confusion_of, evaluate_label, overlap_only};
+use interslice_core::metrics::{confusion_of, evaluate_label, evaluate_label_data, overlap_only};
 use interslice_core::{Geometry, LabelVolume, LengthUnit, Volume};
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -158,5 +165,70 @@ fn edt_256(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, overlap_512, distances_256, distances_512, edt_256);
+/// The blob pair of size `n` from the folder named by `INTERSLICE_BLOBS`, or
+/// `None` (with a printed line) when it is unset or the files are missing.
+fn blob_files(n: usize) -> Option<(Vec<u8>, Vec<u8>)> {
+    let Some(dir) = std::env::var_os("INTERSLICE_BLOBS") else {
+        println!("blob_{n}: skipped (set INTERSLICE_BLOBS to the folder of `blobs.py --raw`)");
+        return None;
+    };
+    let dir = std::path::PathBuf::from(dir);
+    let read = |role: &str| -> Option<Vec<u8>> {
+        let path = dir.join(format!("blob{n}_{role}.u8"));
+        match std::fs::read(&path) {
+            Ok(v) if v.len() == n * n * n => Some(v),
+            Ok(v) => {
+                println!(
+                    "blob_{n}: skipped ({} has {} bytes, not {n}³)",
+                    path.display(),
+                    v.len()
+                );
+                None
+            }
+            Err(e) => {
+                println!("blob_{n}: skipped ({}: {e})", path.display());
+                None
+            }
+        }
+    };
+    Some((read("gt")?, read("pred")?))
+}
+
+fn blob(c: &mut Criterion, n: usize, secs: u64) {
+    let Some((gt, seg)) = blob_files(n) else {
+        return;
+    };
+    let geo = Geometry::new([n; 3], [0.35, 0.35, 0.5], LengthUnit::Micrometre).unwrap();
+    let mut g = c.benchmark_group(format!("blob_{n}"));
+    g.sample_size(10)
+        .measurement_time(Duration::from_secs(secs));
+    g.bench_function("floor_count_equal", |b| {
+        b.iter(|| count_equal(black_box(&gt), black_box(&seg)))
+    });
+    g.bench_function("overlap_only", |b| {
+        b.iter(|| confusion_of(black_box(&gt), black_box(&seg), 1u8))
+    });
+    g.bench_function("evaluate_label", |b| {
+        b.iter(|| evaluate_label_data(&geo, black_box(&gt), black_box(&seg), 1u8, 1.0).unwrap())
+    });
+    g.finish();
+}
+
+fn blob_256(c: &mut Criterion) {
+    blob(c, 256, 6);
+}
+
+fn blob_512(c: &mut Criterion) {
+    blob(c, 512, 20);
+}
+
+criterion_group!(
+    benches,
+    overlap_512,
+    distances_256,
+    distances_512,
+    edt_256,
+    blob_256,
+    blob_512
+);
 criterion_main!(benches);

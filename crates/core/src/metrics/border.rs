@@ -148,8 +148,11 @@ pub fn mark_border_row<M: MaskView>(m: &M, y: usize, z: usize, x0: usize, out: &
                 *i &= b;
             }
         }
-        for (x, (o, &i)) in o.iter_mut().zip(inner.iter()).enumerate() {
-            let border = c[x + 1] && !(c[x] && c[x + 2] && i);
+        // Bitwise, not short-circuit, operators: one branch-free vector loop.
+        let (l, r) = (&c[..len], &c[2..len + 2]);
+        let mid = &c[1..=len];
+        for ((((o, &i), &l), &m), &r) in o.iter_mut().zip(inner.iter()).zip(l).zip(mid).zip(r) {
+            let border = m & !(l & r & i);
             *o |= bit * u8::from(border);
         }
     }

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 pub mod border;
+mod disc;
 pub mod overlap;
 pub mod stats;
 pub mod surface;

@@ -114,20 +114,49 @@ pub fn confusion_where<T: Copy + Sync>(
     let (ng, ns, both) = gt
         .par_chunks(CHUNK)
         .zip(seg.par_chunks(CHUNK))
-        .map(|(a, b)| {
-            // u32 accumulators over at most CHUNK voxels vectorise well.
-            let (mut ng, mut ns, mut both) = (0u32, 0u32, 0u32);
-            for (&x, &y) in a.iter().zip(b) {
-                let p = u32::from(is_fg(x));
-                let q = u32::from(is_fg(y));
-                ng += p;
-                ns += q;
-                both += p & q;
-            }
-            (u64::from(ng), u64::from(ns), u64::from(both))
-        })
+        .map(|(a, b)| count_chunk(a, b, &is_fg))
         .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
     Confusion::from_counts(gt.len() as u64, ng, ns, both)
+}
+
+/// Lanes of the counting loop: a vector register of `u8`.
+const LANES: usize = 32;
+
+/// `(gt, seg, both)` foreground counts of two equal-length runs. The counts
+/// go to `u8` lane accumulators (one compare and add a voxel in a vector
+/// register), flushed to `u64` before 255 steps could overflow them.
+#[inline]
+fn count_chunk<T: Copy>(a: &[T], b: &[T], is_fg: &impl Fn(T) -> bool) -> (u64, u64, u64) {
+    let (mut ng, mut ns, mut both) = (0u64, 0u64, 0u64);
+    let flush = LANES * 255;
+    for (x, y) in a.chunks(flush).zip(b.chunks(flush)) {
+        let mut lg = [0u8; LANES];
+        let mut ls = [0u8; LANES];
+        let mut lb = [0u8; LANES];
+        let xs = x.chunks_exact(LANES);
+        let ys = y.chunks_exact(LANES);
+        let (xt, yt) = (xs.remainder(), ys.remainder());
+        for (xc, yc) in xs.zip(ys) {
+            for l in 0..LANES {
+                let p = u8::from(is_fg(xc[l]));
+                let q = u8::from(is_fg(yc[l]));
+                lg[l] += p;
+                ls[l] += q;
+                lb[l] += p & q;
+            }
+        }
+        for (&p, &q) in xt.iter().zip(yt) {
+            let (p, q) = (u64::from(is_fg(p)), u64::from(is_fg(q)));
+            ng += p;
+            ns += q;
+            both += p & q;
+        }
+        let sum = |v: [u8; LANES]| v.iter().map(|&c| u64::from(c)).sum::<u64>();
+        ng += sum(lg);
+        ns += sum(ls);
+        both += sum(lb);
+    }
+    (ng, ns, both)
 }
 
 /// Per-label voxel counts of two label volumes and of the voxels where they
@@ -224,6 +253,32 @@ mod tests {
             prop_assert_eq!(c, want);
             prop_assert_eq!(LabelHistograms::count(&gt, &seg).confusion(label), want);
         }
+    }
+
+    /// Runs longer than a lane flush and a parallel chunk, all foreground
+    /// (every lane counter at its limit) or patterned, against a naive count.
+    #[test]
+    fn lane_counters_flush_before_overflow() {
+        let n = CHUNK + LANES * 255 * 2 + 37;
+        let ones = vec![1u8; n];
+        assert_eq!(
+            confusion_of(&ones, &ones, 1),
+            Confusion::from_counts(n as u64, n as u64, n as u64, n as u64)
+        );
+        let a: Vec<u8> = (0..n).map(|i| u8::from((i * 7919) % 5 < 2)).collect();
+        let b: Vec<u8> = (0..n).map(|i| u8::from((i * 104_729) % 3 == 0)).collect();
+        let count = |f: &dyn Fn(usize) -> bool| (0..n).filter(|&i| f(i)).count() as u64;
+        let want = Confusion::from_counts(
+            n as u64,
+            count(&|i| a[i] == 1),
+            count(&|i| b[i] == 1),
+            count(&|i| a[i] == 1 && b[i] == 1),
+        );
+        assert_eq!(confusion_of(&a, &b, 1), want);
+        assert_eq!(
+            confusion_of(&a[..LANES * 255 + 31], &b[..LANES * 255 + 31], 1).total(),
+            (LANES * 255 + 31) as u64
+        );
     }
 
     #[test]

@@ -10,21 +10,27 @@
 //! * The border voxels of both masks are found once, in one parallel pass that
 //!   stores two bits a voxel; both directions then read those bits.
 //! * The transform is separable: a z pass counts, in every column, the slices to
-//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps). The
-//!   squared distance from a voxel to B is then the least
-//!   `sx²·Δi² + sy²·Δj² + (sz·count)²` over its slab.
+//!   the nearest voxel of B (integers, 2 bytes a voxel, vectorised sweeps; one
+//!   array reused by both directions). The squared distance from a voxel to B
+//!   is then the least `sx²·Δi² + (sy²·Δj² + (sz·count)²)` over its slab.
 //! * Borders being compared are usually close, so that least value is searched
-//!   for directly around each border voxel of A, outward, skipping every cell
-//!   that cannot beat the best so far: a few dozen cells a voxel. A slab whose
-//!   searches grow too long (far-apart borders) runs the last two passes of the
-//!   separable transform instead (Felzenszwalb–Huttenlocher, [`crate::edt`]):
-//!   envelopes along y evaluated only on the rows that hold border voxels of A,
-//!   then along those rows evaluated only at those voxels. Both ways compute the
-//!   same sums in the same order, and no full-size floating-point array is ever
-//!   allocated.
+//!   for directly around each border voxel of A: the cells of the slab are
+//!   visited from a table sorted by `sx²·Δi² + sy²·Δj²` ([`super::disc`]), four
+//!   at a time, until that lower bound reaches the best value so far; a few
+//!   dozen cells a voxel on dense, close borders. Past the table the search
+//!   goes on row by row outward, skipping every cell that cannot beat the best
+//!   so far. A slab whose searches grow too long (far-apart borders) runs the
+//!   last two passes of the separable transform instead
+//!   (Felzenszwalb–Huttenlocher, [`crate::edt`]): envelopes along y evaluated
+//!   only on the rows that hold border voxels of A, then along those rows
+//!   evaluated only at those voxels. Every way computes the same sums in the
+//!   same order (the two searches take the least of the very same values),
+//!   and no full-size floating-point array is ever allocated: each slab writes
+//!   its distances into its part of one output array.
 use super::Metrics;
 use super::border::{BoundingBox, MaskView, mark_border_row};
-use super::stats::percentile;
+use super::disc::{Disc, GROUP, MAX_CELLS};
+use super::stats::{percentile, summarise};
 use crate::edt::LowerEnvelope;
 use rayon::prelude::*;
 
@@ -79,8 +85,10 @@ impl BorderFlags {
     }
 }
 
-/// Integer z distances of the first pass: `u16` for up to 65 534 slices (2 bytes
-/// a voxel), `u32` beyond.
+/// Integer z distances of the first pass: `i16` for up to 32 765 slices (2
+/// bytes a voxel; signed, because x86-64's baseline vector instructions have
+/// a signed 16-bit minimum and no unsigned one), `u32` beyond. `u16` serves
+/// the tests.
 trait ZDist: Copy + Send + Sync + Ord {
     const NONE: Self;
     const ZERO: Self;
@@ -101,27 +109,63 @@ macro_rules! zdist {
             }
             #[inline]
             fn index(self) -> usize {
+                // Counts are never negative.
                 self as usize
             }
         }
     };
 }
+zdist!(i16);
 zdist!(u16);
 zdist!(u32);
 
+/// The slice counts of [`z_pass`], kept from one direction to the next (at
+/// 512³ a fresh array would cost a quarter of a GiB of page faults).
+#[derive(Default)]
+struct ZScratch {
+    small: Vec<i16>,
+    wide: Vec<u32>,
+}
+
 /// Distances from the voxels flagged `from` to the nearest voxel flagged `to`,
 /// slab by slab, row by row, ascending x. Every value is `+∞` when no voxel is
-/// flagged `to`.
-fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
-    if flags.dims[2] < u16::MAX as usize - 1 {
-        directed_with::<u16>(flags, from, to, spacing, SEARCH_BUDGET)
+/// flagged `to`. `zs` keeps the slice counts' memory for the next call.
+fn directed_reusing(
+    flags: &BorderFlags,
+    from: u8,
+    to: u8,
+    spacing: [f64; 3],
+    zs: &mut ZScratch,
+) -> Vec<f64> {
+    if flags.dims[2] < i16::MAX as usize - 1 {
+        directed_in(
+            flags,
+            [from, to],
+            spacing,
+            SEARCH_BUDGET,
+            MAX_CELLS,
+            &mut zs.small,
+        )
     } else {
-        directed_with::<u32>(flags, from, to, spacing, SEARCH_BUDGET)
+        directed_in(
+            flags,
+            [from, to],
+            spacing,
+            SEARCH_BUDGET,
+            MAX_CELLS,
+            &mut zs.wide,
+        )
     }
 }
 
-/// [`directed`] with slice counts of type `Z`; the direct search of a slab
-/// gives up after `budget` cells per voxel of the slab.
+/// [`directed_reusing`] with fresh slice counts.
+#[cfg(test)]
+fn directed(flags: &BorderFlags, from: u8, to: u8, spacing: [f64; 3]) -> Vec<f64> {
+    directed_reusing(flags, from, to, spacing, &mut ZScratch::default())
+}
+
+/// [`directed_in`] with fresh slice counts.
+#[cfg(test)]
 fn directed_with<Z: ZDist>(
     flags: &BorderFlags,
     from: u8,
@@ -129,12 +173,49 @@ fn directed_with<Z: ZDist>(
     spacing: [f64; 3],
     budget: usize,
 ) -> Vec<f64> {
+    directed_in::<Z>(
+        flags,
+        [from, to],
+        spacing,
+        budget,
+        MAX_CELLS,
+        &mut Vec::new(),
+    )
+}
+
+/// [`directed_reusing`] from the voxels flagged `from` to those flagged `to`, with
+/// slice counts of type `Z` in `zd`, a [`Disc`] of about `disc_cells` cells;
+/// the direct search of a slab gives up after `budget` cells per voxel of the
+/// slab. Each slab writes its distances into its own part of the output,
+/// sized by a first count.
+fn directed_in<Z: ZDist>(
+    flags: &BorderFlags,
+    [from, to]: [u8; 2],
+    spacing: [f64; 3],
+    budget: usize,
+    disc_cells: f64,
+    zd: &mut Vec<Z>,
+) -> Vec<f64> {
     let [cx, cy, cz] = flags.dims;
     let plane = cx * cy;
     if plane * cz == 0 {
         return Vec::new();
     }
-    let zd = z_pass::<Z>(flags, to);
+    let counts: Vec<usize> = flags
+        .bits
+        .par_chunks(plane)
+        .map(|s| count_flagged(s, from))
+        .collect();
+    // Zeroed (not filled) memory: every slab writes its whole part.
+    let mut out = vec![0.0; counts.iter().sum()];
+    let mut parts = Vec::with_capacity(cz);
+    let mut rest = out.as_mut_slice();
+    for &n in &counts {
+        let (head, tail) = rest.split_at_mut(n);
+        parts.push(head);
+        rest = tail;
+    }
+    z_pass::<Z>(flags, to, zd);
     let [sx, sy, sz] = spacing;
     // (sz · slices)² for every count a column can hold, then +∞ for `NONE`.
     let heights: Vec<f64> = (0..cz)
@@ -144,17 +225,16 @@ fn directed_with<Z: ZDist>(
         })
         .chain([f64::INFINITY])
         .collect();
-    let per_slab: Vec<Vec<f64>> = flags
-        .bits
-        .par_chunks(plane)
+    let disc = Disc::new(cx, cy, sx * sx, sy * sy, disc_cells);
+    parts
+        .into_par_iter()
+        .zip(flags.bits.par_chunks(plane))
         .zip(zd.par_chunks(plane))
-        .map_init(
+        .filter(|((part, _), _)| !part.is_empty())
+        .for_each_init(
             || SlabScratch::new(cx, cy),
-            |sc, (fs, zs)| {
+            |sc, ((part, fs), zs)| {
                 sc.find_queries(fs, cx, from);
-                if sc.rows.is_empty() {
-                    return Vec::new();
-                }
                 let slab = Slab {
                     zs,
                     cx,
@@ -163,13 +243,34 @@ fn directed_with<Z: ZDist>(
                     sx2: sx * sx,
                     sy2: sy * sy,
                     inv_sx2: 1.0 / (sx * sx),
+                    disc: &disc,
                 };
-                sc.search(&slab, budget.saturating_mul(plane))
-                    .unwrap_or_else(|| sc.envelopes(&slab))
+                if !sc.search(&slab, budget.saturating_mul(plane), part) {
+                    sc.envelopes(&slab, part);
+                }
             },
-        )
-        .collect();
-    per_slab.concat()
+        );
+    out
+}
+
+/// Voxels of `bits` with `bit` (one bit) set: `u8` lane counters, flushed
+/// before they could overflow, so the loop runs on whole vector registers.
+fn count_flagged(bits: &[u8], bit: u8) -> usize {
+    const LANES: usize = 32;
+    let shift = bit.trailing_zeros();
+    let mut n = 0;
+    for block in bits.chunks(LANES * 255) {
+        let mut lanes = [0u8; LANES];
+        let runs = block.chunks_exact(LANES);
+        n += runs.remainder().iter().filter(|&&f| f & bit != 0).count();
+        for run in runs {
+            for (l, &f) in lanes.iter_mut().zip(run) {
+                *l += (f >> shift) & 1;
+            }
+        }
+        n += lanes.iter().map(|&l| usize::from(l)).sum::<usize>();
+    }
+    n
 }
 
 /// One slab of the z pass's slice counts and what turns them into squared
@@ -187,9 +288,58 @@ struct Slab<'a, Z> {
     sy2: f64,
     /// `1 / sx2`, for the search's window widths (which have a step to spare).
     inv_sx2: f64,
+    /// The cell offsets the search visits first.
+    disc: &'a Disc,
 }
 
 impl<Z: ZDist> Slab<'_, Z> {
+    /// [`Slab::nearest`] by the cells of the disc, nearest first, a group of
+    /// [`GROUP`] at a time (independent of each other, so they overlap in the
+    /// processor) while the group's first can beat the best value so far;
+    /// past the disc (a value beyond its limit), by [`Slab::nearest`].
+    #[inline]
+    fn nearest_disc(&self, px: usize, py: usize, budget: &mut usize) -> Option<f64> {
+        let at = py * self.cx + px;
+        if self.zs[at] == Z::ZERO {
+            // The voxel itself is flagged: `heights[0]` is 0, the least of all.
+            return Some(self.heights[0]);
+        }
+        let mut best = f64::INFINITY;
+        let last = self.heights.len() - 1;
+        let mut visited = 0;
+        for group in self.disc.groups() {
+            if group[0].lb >= best {
+                break;
+            }
+            visited += GROUP;
+            let m = group
+                .iter()
+                .map(|c| {
+                    let i = px.wrapping_add_signed(c.d[0] as isize);
+                    let j = py.wrapping_add_signed(c.d[1] as isize);
+                    let inside = i < self.cx && j < self.cy;
+                    // Outside the slab reads the count of the voxel itself
+                    // and maps it to the infinite height.
+                    let z = self.zs[if inside {
+                        at.wrapping_add_signed(c.lin)
+                    } else {
+                        at
+                    }];
+                    let z = if inside { z.index().min(last) } else { last };
+                    c.x + (c.fy + self.heights[z])
+                })
+                .fold(f64::INFINITY, |m, v| if v < m { v } else { m });
+            if m < best {
+                best = m;
+            }
+        }
+        *budget = budget.checked_sub(visited)?;
+        if best > self.disc.limit {
+            return self.nearest(px, py, budget);
+        }
+        Some(best)
+    }
+
     /// The squared distance from voxel `(px, py)` to the nearest flagged voxel:
     /// rows are visited outward from `py` and each row outward from `px`,
     /// skipping every cell whose `sx²·Δi² + sy²·Δj²` alone reaches the best
@@ -286,35 +436,45 @@ impl SlabScratch {
         }
     }
 
-    /// The voxels flagged `from` in slab `fs` (`[j][i]`), row by row.
+    /// The voxels flagged `from` (one bit) in slab `fs` (`[j][i]`), row by
+    /// row: eight flags at a time as one word, then its set bits.
     fn find_queries(&mut self, fs: &[u8], cx: usize, from: u8) {
+        debug_assert_eq!(from.count_ones(), 1);
         self.queries.clear();
         self.rows.clear();
+        let rep = u64::from(from) * 0x0101_0101_0101_0101;
         for (j, row) in fs.chunks_exact(cx).enumerate() {
             let start = self.queries.len();
-            self.queries.extend(
-                row.iter()
-                    .enumerate()
-                    .filter(|(_, f)| **f & from != 0)
-                    .map(|(i, _)| i),
-            );
+            for (c, run) in row.chunks(8).enumerate() {
+                let mut w = [0u8; 8];
+                w[..run.len()].copy_from_slice(run);
+                // At most one bit a byte: each step clears one voxel.
+                let mut x = u64::from_le_bytes(w) & rep;
+                while x != 0 {
+                    self.queries.push(c * 8 + x.trailing_zeros() as usize / 8);
+                    x &= x - 1;
+                }
+            }
             if self.queries.len() > start {
                 self.rows.push((j, start, self.queries.len()));
             }
         }
     }
 
-    /// Distances at the query voxels by a direct search around each of them,
-    /// or `None` when the searches would visit more than `budget` cells
-    /// (far-apart borders): then the envelopes cost less.
-    fn search<Z: ZDist>(&self, slab: &Slab<'_, Z>, mut budget: usize) -> Option<Vec<f64>> {
-        let mut out = Vec::with_capacity(self.queries.len());
+    /// Distances at the query voxels into `out` by a direct search around
+    /// each of them; false when the searches would visit more than `budget`
+    /// cells (far-apart borders): then the envelopes cost less.
+    fn search<Z: ZDist>(&self, slab: &Slab<'_, Z>, mut budget: usize, out: &mut [f64]) -> bool {
+        let mut o = out.iter_mut();
         for &(j, s, e) in &self.rows {
-            for &p in &self.queries[s..e] {
-                out.push(slab.nearest(p, j, &mut budget)?.sqrt());
+            for (&p, d) in self.queries[s..e].iter().zip(&mut o) {
+                match slab.nearest_disc(p, j, &mut budget) {
+                    Some(v) => *d = v.sqrt(),
+                    None => return false,
+                }
             }
         }
-        Some(out)
+        true
     }
 
     /// Distances at the query voxels by the last two passes of the separable
@@ -323,7 +483,7 @@ impl SlabScratch {
     /// [`BLOCK`] at a time into `cols`, so that both the reads and the
     /// envelope's input are contiguous. The x pass builds the envelope of every
     /// query row and evaluates it at the query voxels.
-    fn envelopes<Z: ZDist>(&mut self, slab: &Slab<'_, Z>) -> Vec<f64> {
+    fn envelopes<Z: ZDist>(&mut self, slab: &Slab<'_, Z>, out: &mut [f64]) {
         let SlabScratch {
             queries,
             rows,
@@ -366,12 +526,15 @@ impl SlabScratch {
             }
             i0 += w;
         }
-        let mut out = Vec::with_capacity(queries.len());
         for (r, &(_, s, e)) in rows.iter().enumerate() {
             env.build(&g[r * cx..(r + 1) * cx], sx2);
-            env.evaluate_sorted(queries[s..e].iter().copied(), |_, d2| out.push(d2.sqrt()));
+            let mut o = out[s..e].iter_mut();
+            env.evaluate_sorted(queries[s..e].iter().copied(), |_, d2| {
+                if let Some(d) = o.next() {
+                    *d = d2.sqrt();
+                }
+            });
         }
-        out
     }
 }
 
@@ -380,11 +543,13 @@ impl SlabScratch {
 /// in the flags' layout (x fastest). Tasks own the same run of [`Z_RUN`]
 /// positions in every slab and sweep it forward then backward along k: whole
 /// contiguous runs at a time, which the compiler vectorises.
-fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
+fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8, zd: &mut Vec<Z>) {
     let [cx, cy, cz] = flags.dims;
     let plane = cx * cy;
-    // Zeroed (not filled) memory: the forward sweep writes every voxel.
-    let mut zd = vec![Z::ZERO; plane * cz];
+    if zd.len() != plane * cz {
+        // Zeroed (not filled) memory: the forward sweep writes every voxel.
+        *zd = vec![Z::ZERO; plane * cz];
+    }
     let nruns = plane.div_ceil(Z_RUN);
     let mut runs: Vec<Vec<&mut [Z]>> = (0..nruns).map(|_| Vec::with_capacity(cz)).collect();
     for slab in zd.chunks_mut(plane) {
@@ -418,78 +583,6 @@ fn z_pass<Z: ZDist>(flags: &BorderFlags, to: u8) -> Vec<Z> {
             }
         }
     });
-    zd
-}
-
-/// Summary of one direction's distances.
-struct Directed {
-    n: usize,
-    max: Option<f64>,
-    mean: Option<f64>,
-    p95: Option<f64>,
-    sum: f64,
-    within: usize,
-}
-
-/// Distances summed per chunk of this many, then the chunks in order: the same
-/// distances give the same sums whatever the threads do.
-const SUM_CHUNK: usize = 1 << 14;
-
-/// A compensated (Neumaier) running sum: millions of distances add up to
-/// their sum correctly rounded in all but rare cases, in a fixed order.
-#[derive(Clone, Copy, Default)]
-struct Sum {
-    s: f64,
-    c: f64,
-}
-
-impl Sum {
-    #[inline]
-    fn add(self, x: f64) -> Sum {
-        let t = self.s + x;
-        let c = if self.s.abs() >= x.abs() {
-            (self.s - t) + x
-        } else {
-            (x - t) + self.s
-        };
-        Sum {
-            s: t,
-            c: self.c + c,
-        }
-    }
-
-    fn total(self) -> f64 {
-        self.s + self.c
-    }
-}
-
-fn summarise(d: &mut [f64], tol: f64) -> Directed {
-    let n = d.len();
-    // Distances equal to the tolerance up to rounding count as within it.
-    let limit = tol * (1.0 + 1e-12);
-    let parts: Vec<(Sum, f64, usize)> = d
-        .par_chunks(SUM_CHUNK)
-        .map(|c| {
-            c.iter()
-                .fold((Sum::default(), f64::NEG_INFINITY, 0), |(s, m, w), &x| {
-                    (s.add(x), m.max(x), w + usize::from(x <= limit))
-                })
-        })
-        .collect();
-    let sum = parts
-        .iter()
-        .fold(Sum::default(), |a, p| a.add(p.0.s).add(p.0.c))
-        .total();
-    let max = (n > 0).then(|| parts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
-    let within = parts.iter().map(|p| p.2).sum();
-    Directed {
-        n,
-        max,
-        mean: (n > 0).then(|| sum / n as f64),
-        p95: percentile(d, 95.0),
-        sum,
-        within,
-    }
 }
 
 /// The border counts and every border-distance statistic of `gt` and `seg`
@@ -508,8 +601,10 @@ pub(super) fn add_distances<G: MaskView, S: MaskView>(
         return;
     };
     let flags = BorderFlags::new(gt, seg, bb);
-    let mut gs = directed(&flags, GT_BIT, SEG_BIT, spacing);
-    let mut sg = directed(&flags, SEG_BIT, GT_BIT, spacing);
+    let mut zs = ZScratch::default();
+    let mut gs = directed_reusing(&flags, GT_BIT, SEG_BIT, spacing, &mut zs);
+    let mut sg = directed_reusing(&flags, SEG_BIT, GT_BIT, spacing, &mut zs);
+    drop(zs);
     m.border_gt = gs.len() as u64;
     m.border_seg = sg.len() as u64;
     if gs.is_empty() || sg.is_empty() {
@@ -616,6 +711,73 @@ mod tests {
                 prop_assert!(same(&wide, &want));
                 prop_assert_eq!(&directed(&f, from, to, s), &wide);
             }
+        }
+
+        /// Every disc size (down to one cell, when the row search takes over
+        /// past the disc) and every count type give the same values, equal
+        /// to brute force, on boxes wider than a run of eight flags.
+        #[test]
+        fn disc_sizes_and_count_types_agree((f, s) in wide_flags(), cells in 0.5f64..60.0) {
+            for (from, to) in [(GT_BIT, SEG_BIT), (SEG_BIT, GT_BIT)] {
+                let want = brute(&f, from, to, s);
+                let full = directed_in::<i16>(&f, [from, to], s, usize::MAX, MAX_CELLS, &mut Vec::new());
+                prop_assert!(same(&full, &want), "{full:?} vs {want:?}");
+                for z in [directed_in::<i16>(&f, [from, to], s, usize::MAX, cells, &mut Vec::new()),
+                          directed_in::<u32>(&f, [from, to], s, usize::MAX, cells, &mut Vec::new()),
+                          directed_in::<u16>(&f, [from, to], s, usize::MAX, 1.0, &mut Vec::new())] {
+                    prop_assert_eq!(&z, &full);
+                }
+                // Both directions through one scratch, as `add_distances` runs them.
+                let mut zs = ZScratch::default();
+                let a = directed_reusing(&f, from, to, s, &mut zs);
+                let b = directed_reusing(&f, to, from, s, &mut zs);
+                prop_assert_eq!(&a, &full);
+                prop_assert_eq!(b, directed_with::<u32>(&f, to, from, s, usize::MAX));
+            }
+        }
+    }
+
+    /// Boxes up to 40 wide and tall, a few slabs, flags of varying density.
+    fn wide_flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
+        (
+            1usize..40,
+            1usize..40,
+            1usize..5,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.2f64..3.0,
+            0.02f64..0.5,
+        )
+            .prop_flat_map(|(x, y, z, a, b, c, p)| {
+                (
+                    Just([x, y, z]),
+                    proptest::collection::vec(0u8..4, x * y * z),
+                    proptest::collection::vec(proptest::bool::weighted(p), x * y * z),
+                    Just([a, b, c]),
+                )
+            })
+            .prop_map(|(dims, bits, keep, s)| {
+                let bits = bits
+                    .iter()
+                    .zip(&keep)
+                    .map(|(&b, &k)| if k { b } else { 0 })
+                    .collect();
+                (BorderFlags { dims, bits }, s)
+            })
+    }
+
+    #[test]
+    fn flag_counts_cross_their_flush() {
+        let bits: Vec<u8> = (0..20_000usize)
+            .map(|n| ((n * 7919) % 4) as u8 | u8::from(n < 9000))
+            .collect();
+        for bit in [GT_BIT, SEG_BIT] {
+            let want = bits.iter().filter(|&&b| b & bit != 0).count();
+            assert_eq!(count_flagged(&bits, bit), want);
+            assert_eq!(
+                count_flagged(&bits[..31], bit),
+                bits[..31].iter().filter(|&&b| b & bit != 0).count()
+            );
         }
     }
 }
