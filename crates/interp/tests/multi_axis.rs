@@ -28,6 +28,18 @@ fn assert_reproduced(out: &Mask, truth: &Mask, inputs: &[(Axis, Vec<usize>)]) {
     }
 }
 
+/// `combine` of one z and one x input.
+fn combine_zx(m: &dyn Interpolator, z: (&Mask, &[usize]), x: (&Mask, &[usize])) -> Mask {
+    combine(
+        m,
+        &[
+            SparseMask::new(z.0, Axis::Z, z.1),
+            SparseMask::new(x.0, Axis::X, x.1),
+        ],
+    )
+    .unwrap()
+}
+
 /// Up to three random ellipsoids in a small anisotropic volume.
 fn blobs() -> impl Strategy<Value = Mask> {
     let ell = (
@@ -103,14 +115,7 @@ fn crossings_and_drawn_empty_slices_are_kept_and_the_blend_beats_the_worse_axis(
     assert!(!ball.slice(Axis::X, 29).unwrap().contains(&true));
     let (mz, mx) = (sparse(&ball, Axis::Z, &z), sparse(&ball, Axis::X, &x));
     let m = method("shape-based");
-    let both = combine(
-        m.as_ref(),
-        &[
-            SparseMask::new(&mz, Axis::Z, &z),
-            SparseMask::new(&mx, Axis::X, &x),
-        ],
-    )
-    .unwrap();
+    let both = combine_zx(m.as_ref(), (&mz, &z), (&mx, &x));
     assert_reproduced(&both, &ball, &[(Axis::Z, z.clone()), (Axis::X, x.clone())]);
     let only_z = m.interpolate(SparseMask::new(&mz, Axis::Z, &z)).unwrap();
     let only_x = m.interpolate(SparseMask::new(&mx, Axis::X, &x)).unwrap();
@@ -139,14 +144,7 @@ fn a_single_slice_of_another_axis_is_written_back() {
     let x = vec![10];
     let (mz, mx) = (sparse(&ball, Axis::Z, &z), sparse(&ball, Axis::X, &x));
     let m = method("shape-based");
-    let both = combine(
-        m.as_ref(),
-        &[
-            SparseMask::new(&mz, Axis::Z, &z),
-            SparseMask::new(&mx, Axis::X, &x),
-        ],
-    )
-    .unwrap();
+    let both = combine_zx(m.as_ref(), (&mz, &z), (&mx, &x));
     assert_reproduced(&both, &ball, &[(Axis::Z, z.clone()), (Axis::X, x.clone())]);
     let only_z = m.interpolate(SparseMask::new(&mz, Axis::Z, &z)).unwrap();
     let g = ball.geometry();

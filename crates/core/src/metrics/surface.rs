@@ -660,25 +660,32 @@ mod tests {
             .collect()
     }
 
-    fn flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
+    /// Random border flags in boxes up to `nx` × `ny` × `nz`, a voxel
+    /// flagged with probability in `density`, and random spacing.
+    fn random_flags(
+        nx: usize,
+        ny: usize,
+        nz: usize,
+        density: std::ops::Range<f64>,
+    ) -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
         (
-            1usize..12,
-            1usize..12,
-            1usize..9,
+            1usize..nx,
+            1usize..ny,
+            1usize..nz,
             0.2f64..3.0,
             0.2f64..3.0,
             0.2f64..3.0,
+            density,
         )
-            .prop_flat_map(|(x, y, z, a, b, c)| {
+            .prop_flat_map(|(x, y, z, a, b, c, p)| {
                 (
                     Just([x, y, z]),
                     proptest::collection::vec(0u8..4, x * y * z),
-                    proptest::collection::vec(proptest::bool::weighted(0.15), x * y * z),
+                    proptest::collection::vec(proptest::bool::weighted(p), x * y * z),
                     Just([a, b, c]),
                 )
             })
             .prop_map(|(dims, bits, keep, s)| {
-                // Sparse flags: most voxels carry neither bit.
                 let bits = bits
                     .iter()
                     .zip(&keep)
@@ -686,6 +693,11 @@ mod tests {
                     .collect();
                 (BorderFlags { dims, bits }, s)
             })
+    }
+
+    /// Small boxes of sparse flags: most voxels carry neither bit.
+    fn flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
+        random_flags(12, 12, 9, 0.15..0.150001)
     }
 
     fn same(got: &[f64], want: &[f64]) -> bool {
@@ -739,31 +751,7 @@ mod tests {
 
     /// Boxes up to 40 wide and tall, a few slabs, flags of varying density.
     fn wide_flags() -> impl Strategy<Value = (BorderFlags, [f64; 3])> {
-        (
-            1usize..40,
-            1usize..40,
-            1usize..5,
-            0.2f64..3.0,
-            0.2f64..3.0,
-            0.2f64..3.0,
-            0.02f64..0.5,
-        )
-            .prop_flat_map(|(x, y, z, a, b, c, p)| {
-                (
-                    Just([x, y, z]),
-                    proptest::collection::vec(0u8..4, x * y * z),
-                    proptest::collection::vec(proptest::bool::weighted(p), x * y * z),
-                    Just([a, b, c]),
-                )
-            })
-            .prop_map(|(dims, bits, keep, s)| {
-                let bits = bits
-                    .iter()
-                    .zip(&keep)
-                    .map(|(&b, &k)| if k { b } else { 0 })
-                    .collect();
-                (BorderFlags { dims, bits }, s)
-            })
+        random_flags(40, 40, 5, 0.02..0.5)
     }
 
     #[test]
