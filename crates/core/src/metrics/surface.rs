@@ -15,7 +15,7 @@
 //!   is then the least `sx²·Δi² + (sy²·Δj² + (sz·count)²)` over its slab.
 //! * Borders being compared are usually close, so that least value is searched
 //!   for directly around each border voxel of A: the cells of the slab are
-//!   visited from a table sorted by `sx²·Δi² + sy²·Δj²` ([`super::disc`]), four
+//!   visited from a table sorted by `sx²·Δi² + sy²·Δj²` (`disc.rs`), four
 //!   at a time, until that lower bound reaches the best value so far; a few
 //!   dozen cells a voxel on dense, close borders. Past the table the search
 //!   goes on row by row outward, skipping every cell that cannot beat the best
