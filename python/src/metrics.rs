@@ -5,8 +5,8 @@ use crate::arrays::{
 use crate::volumes::{geometry, parse_unit};
 use crate::{error, to_py};
 use interslice_core::metrics::{
-    AllReport, Confusion, LabelReport, Metrics, confusion_of, evaluate_all_data,
-    evaluate_foreground_data, evaluate_label_data,
+    AllReport, Confusion, LabelReport, Metrics, confusion_of, evaluate_all_and_foreground_data,
+    evaluate_label_data,
 };
 use interslice_core::staple::{MAX_RATERS, StapleParams};
 use interslice_core::{Geometry, LengthUnit, Mask, Volume};
@@ -173,21 +173,13 @@ pub fn evaluate<'py>(
     let (all, fg) = if let (AnyArray::U16(g), AnyArray::U16(s)) = (&a, &b) {
         let p = pair(g, s, spacing, unit)?;
         py.detach(|| {
-            rayon::join(
-                || evaluate_all_data(&p.geometry, &p.gt.data, &p.seg.data, tolerance),
-                || evaluate_foreground_data(&p.geometry, &p.gt.data, &p.seg.data, tolerance),
-            )
+            evaluate_all_and_foreground_data(&p.geometry, &p.gt.data, &p.seg.data, tolerance)
         })
     } else {
         let (g, s, geo) = u16_pair(py, &a, &b, spacing, unit)?;
-        py.detach(|| {
-            rayon::join(
-                || evaluate_all_data(&geo, &g, &s, tolerance),
-                || evaluate_foreground_data(&geo, &g, &s, tolerance),
-            )
-        })
-    };
-    let (all, fg) = (all.map_err(error)?, fg.map_err(error)?);
+        py.detach(|| evaluate_all_and_foreground_data(&geo, &g, &s, tolerance))
+    }
+    .map_err(error)?;
     to_py(
         py,
         &AllReport {

@@ -9,8 +9,7 @@
 use crate::series::SeriesArg;
 use anyhow::{Context, Result, bail};
 use interslice_core::metrics::{
-    AllReport, DEFAULT_TOLERANCE, LabelReport, Metrics, evaluate_all, evaluate_foreground,
-    evaluate_label,
+    AllReport, DEFAULT_TOLERANCE, LabelReport, Metrics, evaluate_all_and_foreground, evaluate_label,
 };
 use interslice_core::{LabelVolume, LengthUnit};
 use std::path::{Path, PathBuf};
@@ -104,11 +103,7 @@ pub fn run(a: Args) -> Result<()> {
         return Ok(());
     }
 
-    let (all, fg) = rayon::join(
-        || evaluate_all(&gt, &seg, a.tolerance),
-        || evaluate_foreground(&gt, &seg, a.tolerance),
-    );
-    let (all, fg) = (all?, fg?);
+    let (all, fg) = evaluate_all_and_foreground(&gt, &seg, a.tolerance)?;
     spin.finish_and_clear();
     if a.json {
         let out = AllReport {

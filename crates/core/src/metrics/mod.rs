@@ -254,6 +254,35 @@ pub fn evaluate_all_data(
         .collect())
 }
 
+/// [`evaluate_all`] and [`evaluate_foreground`] as `interslice evaluate`
+/// reports them without `--label`.
+pub fn evaluate_all_and_foreground(
+    gt: &LabelVolume,
+    seg: &LabelVolume,
+    tolerance: f64,
+) -> Result<(BTreeMap<u16, Metrics>, Metrics), CoreError> {
+    gt.geometry().ensure_same_grid(seg.geometry())?;
+    evaluate_all_and_foreground_data(gt.geometry(), gt.data(), seg.data(), tolerance)
+}
+
+/// [`evaluate_all_data`] and [`evaluate_foreground_data`] together. With a
+/// single label in either volume the union of all labels is that label, so
+/// its metrics are the foreground's too and the distances (most of the
+/// work) are computed once.
+pub fn evaluate_all_and_foreground_data(
+    geometry: &Geometry,
+    gt: &[u16],
+    seg: &[u16],
+    tolerance: f64,
+) -> Result<(BTreeMap<u16, Metrics>, Metrics), CoreError> {
+    let all = evaluate_all_data(geometry, gt, seg, tolerance)?;
+    let fg = match (all.len(), all.values().next()) {
+        (1, Some(m)) => m.clone(),
+        _ => evaluate_foreground_data(geometry, gt, seg, tolerance)?,
+    };
+    Ok((all, fg))
+}
+
 /// Metrics of the union of all labels: every non-zero voxel is foreground in
 /// both volumes (cell + nucleus + nucleoli as one object). This is the
 /// "over all labels" aggregate of `interslice evaluate`.

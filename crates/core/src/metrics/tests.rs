@@ -108,6 +108,17 @@ proptest! {
             Some(x) => prop_assert_eq!(x, &m),
             None => prop_assert!(m.tp + m.fp + m.fn_ == 0),
         }
+        // Together, and with one label only (the union is that label).
+        let (all2, fg) = evaluate_all_and_foreground(&gl, &pl, tol).unwrap();
+        prop_assert_eq!(&all2, &all);
+        prop_assert_eq!(&fg, &evaluate_foreground(&gl, &pl, tol).unwrap());
+        let only = |a: &[bool]| -> LabelVolume {
+            Volume::from_vec(geo.clone(), a.iter().map(|&x| u16::from(x) * 3).collect()).unwrap()
+        };
+        let (go, po) = (only(&g), only(&p));
+        let (one, fg1) = evaluate_all_and_foreground(&go, &po, tol).unwrap();
+        prop_assert_eq!(&fg1, &evaluate_foreground(&go, &po, tol).unwrap());
+        prop_assert!(one.len() <= 1);
         prop_assert_eq!(overlap_only(&gl, &pl, 3).unwrap(), m.confusion());
 
         let tp = g.iter().zip(&p).filter(|(a, b)| **a && **b).count() as u64;
