@@ -36,7 +36,7 @@
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
 use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
-use crate::loo::{Compact, stack};
+use crate::loo::Compact;
 use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
 use interslice_core::{Axis, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
@@ -222,17 +222,14 @@ pub fn advise(
     image: Option<Arc<Volume<f32>>>,
 ) -> Result<Advice, InterpError> {
     let drawn = sorted_drawn(sparse, axis, drawn)?;
+    if let Some(img) = &image {
+        img.geometry().ensure_same_grid(sparse.geometry())?;
+    }
     // The leave-one-out runs on the stack of the drawn slices, so an image
-    // goes with them stacked the same way.
-    let image = match image {
-        Some(img) => {
-            img.geometry().ensure_same_grid(sparse.geometry())?;
-            Some(Arc::new(stack(&img, axis, &drawn)?))
-        }
-        None => None,
-    };
-    let method = by_name_with_image(method, image)?;
-    let method = method.as_ref();
+    // goes with them stacked the same way (`Interpolator::for_stack`).
+    let whole = by_name_with_image(method, image)?;
+    let stacked = whole.for_stack(axis, &drawn)?;
+    let method = stacked.as_deref().unwrap_or(whole.as_ref());
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
             "advice needs at least two drawn slices along {axis}, got {}: trace the first \
