@@ -12,5 +12,4 @@ if ! "$venv/bin/python" -c "import $imports" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/python" -m pip install -q --disable-pip-version-check $packages
 fi
-cargo build -q -p interslice-cli
-bin="$target/debug/interslice"
+bin="$(scripts/test-binary.sh)"

@@ -5,4 +5,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 data="$(scripts/fetch-interp-data.sh --only stardist)"
-INTERSLICE_INTERP_DATA="$data" cargo test -q -p interslice-interp --test image_data
+INTERSLICE_INTERP_DATA="$data" cargo test -q --workspace --test image_data

@@ -9,7 +9,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-target="${CARGO_TARGET_DIR:-target}"
-cargo build -q -p interslice-cli
-INTERSLICE_BIN="$(cd "$target/debug" && pwd)/interslice" \
-  cargo test -q -p interslice-io --test mutation -- --ignored --nocapture
+INTERSLICE_BIN="$(scripts/test-binary.sh)" \
+  cargo test -q --workspace --test mutation -- --ignored --nocapture

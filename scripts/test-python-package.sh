@@ -64,8 +64,8 @@ rm -rf "$target/wheels-python"
 "$venv/bin/maturin" build -q --strip --profile dev -m python/Cargo.toml -i "$py" -o "$target/wheels-python"
 "$py" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels-python/interslice-*.whl
 
-cargo build -q -p interslice-cli
-export INTERSLICE_BIN="$target/debug/interslice"
+INTERSLICE_BIN="$(scripts/test-binary.sh)"
+export INTERSLICE_BIN
 
 echo "== python/: pytest"
 QT_QPA_PLATFORM=offscreen xvfb-run -a "$py" -m pytest -q -p no:cacheprovider python/tests

@@ -18,7 +18,6 @@
 #   E2E_FIGURES=figures.json ...                            # keep the measured figures
 set -euo pipefail
 cd "$(dirname "$0")/.."
-root=$PWD
 
 if ! command -v npm >/dev/null; then
   echo "error: npm (Node.js 20) is needed for the web UI tests" >&2
@@ -34,16 +33,12 @@ echo "-- lint (ESLint) and formatting (Prettier)"
 echo "-- vitest"
 (cd web && npx vitest run)
 
-profile="${PROFILE:-debug}"
-echo "-- $profile binary (embeds web/dist)"
-if [ "$profile" = release ]; then
-  cargo build --release -p interslice-cli
-else
-  cargo build -p interslice-cli
-fi
+echo "-- ${PROFILE:-debug} binary (embeds web/dist)"
+INTERSLICE_BIN="$(scripts/test-binary.sh)"
+export INTERSLICE_BIN
 
 echo "-- API types: web/generated/api-schema.d.ts is what the binary's OpenAPI document gives"
-INTERSLICE_BIN="${CARGO_TARGET_DIR:-$root/target}/$profile/interslice" scripts/gen-api-types.sh --check
+scripts/gen-api-types.sh --check
 
 if [ ! -x /usr/bin/chromium ]; then
   echo "-- installing chromium"
@@ -55,5 +50,4 @@ fi
 echo "-- end-to-end (headless Chromium, real server)"
 [ -n "${SCREENSHOTS:-}" ] && export SCREENSHOTS="$(realpath -m "$SCREENSHOTS")"
 [ -n "${E2E_FIGURES:-}" ] && export E2E_FIGURES="$(realpath -m "$E2E_FIGURES")"
-export INTERSLICE_BIN="${CARGO_TARGET_DIR:-$root/target}/$profile/interslice"
 (cd web && npm run e2e --silent)
