@@ -18,10 +18,11 @@
 //! slices. `shape-aligned` keeps its caps *between* drawn slices (an object
 //! that ends inside a gap), where the tracing says the object stops.
 use crate::aligned::ShapeAligned;
+use crate::crop::AXIS_SLICES;
 use crate::loo::{Compact, HeldOut, overlap, pooled_dice};
 use crate::nearest::Nearest;
 use crate::shape_based::ShapeBased;
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 
 /// Pooled Dice a later candidate must gain over an earlier one to be chosen.
@@ -54,8 +55,15 @@ pub struct Choice {
 
 impl ShapeAuto {
     /// Choose the candidate for `input` on its drawn slices.
+    ///
+    /// Only the drawn slices from [`AXIS_SLICES`] before the first that
+    /// shows the label to as many after the last are held out in turn:
+    /// slices farther out are empty in every prediction and add nothing to
+    /// the pooled Dice, and leaving them out makes the choice the same on
+    /// the label's box ([`crate::crop`]) as on the whole volume.
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
-        let compact = Compact::of(input)?;
+        let near = near_label(input)?;
+        let compact = Compact::of(&SparseMask::new(input.mask, input.axis, &near))?;
         let cands = candidates();
         let mut scores = Vec::new();
         let mut preds = Vec::new();
@@ -94,7 +102,31 @@ impl ShapeAuto {
     }
 }
 
+/// The drawn slices of `input` within [`AXIS_SLICES`] drawn slices of the
+/// first and last that show the label (all of them when none does).
+fn near_label(input: &SparseMask<'_>) -> Result<Vec<usize>, InterpError> {
+    let d = input.drawn;
+    let mut shown = Vec::with_capacity(d.len());
+    for &s in d {
+        shown.push(input.mask.slice(input.axis, s)?.iter().any(|&x| x));
+    }
+    let (Some(first), Some(last)) = (
+        shown.iter().position(|&x| x),
+        shown.iter().rposition(|&x| x),
+    ) else {
+        return Ok(d.to_vec());
+    };
+    let lo = first.saturating_sub(AXIS_SLICES);
+    let hi = (last + AXIS_SLICES).min(d.len() - 1);
+    Ok(d[lo..=hi].to_vec())
+}
+
 impl Interpolator for ShapeAuto {
+    fn box_reach(&self) -> BoxReach {
+        // The widest of its candidates' (shape-aligned's).
+        BoxReach::Drift
+    }
+
     fn name(&self) -> &'static str {
         "shape-auto"
     }

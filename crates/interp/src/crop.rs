@@ -2,25 +2,46 @@
 //!
 //! A structure usually fills a small part of its volume (a nucleus in a 256³
 //! cell, a lesion in a CT), yet a method given the whole volume computes
-//! distance maps and blends over every slice. The shape methods
-//! ([`Interpolator::bounded_by_tracing`]) cannot put a voxel outside
+//! distance maps and blends over every slice. The shape methods cannot put a
+//! voxel outside
 //! - the in-plane bounding box of the label's drawn outlines (signed-distance
-//!   blends are positive outside every outline, copies and aligned shapes stay
-//!   between them), nor
+//!   blends and monotone cubics are positive where every outline is, copies
+//!   and aligned shapes stay between them), nor
 //! - past the drawn slice after the last drawn slice that shows the label,
 //!   nor before the one before the first (a gap between two drawn slices
 //!   where the label is absent stays empty: the invariant of every method),
 //!
-//! so the runner hands them that box plus a [`MARGIN`] of background and
-//! [`AXIS_SLICES`] more drawn slices along the axis, and
-//! pastes the result back. The claim is checked, not trusted: a result that
-//! reaches the box's in-plane sides (where the volume goes on) is computed
-//! again on the whole volume. Tests compare both ways voxel for voxel.
+//! so the runner hands them that box plus a margin of background and
+//! [`AXIS_SLICES`] more drawn slices along the axis, and pastes the result
+//! back. How wide the margin is depends on what the method reads
+//! ([`BoxReach`]): a method whose every value on a pixel comes from that
+//! pixel's distances to the outlines ([`BoxReach::Outline`]) needs
+//! [`MARGIN`], and gives the whole volume's result voxel for voxel; one that
+//! follows objects as they move between drawn slices ([`BoxReach::Drift`],
+//! `shape-aligned` and so the default) reads as far as they move, and gets
+//! that drift three times over on top. The claim is checked, not trusted: a
+//! result that reaches the box's in-plane sides (where the volume goes on) is
+//! computed again on the whole volume. Tests compare both ways.
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
 
 /// Background voxels kept around the drawn outlines, in-plane.
 pub const MARGIN: usize = 2;
+
+/// What a method reads past the drawn outlines of a label
+/// ([`crate::Interpolator::box_reach`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoxReach {
+    /// The whole volume: never run on a box (image-aware and mesh methods).
+    Whole,
+    /// Each pixel's own distances to the outlines: the box plus [`MARGIN`]
+    /// gives the whole volume's result exactly.
+    Outline,
+    /// Distances sampled where the objects move to between drawn slices:
+    /// the box grows by three times the largest step of an outline's box
+    /// between consecutive drawn slices ([`drift`]).
+    Drift,
+}
 
 /// Drawn slices kept beyond the first and last drawn slice that show the
 /// label: the cubic slopes of `shape-cubic` and `shape-aligned` read one
@@ -37,8 +58,33 @@ pub struct LabelBox {
     pub dims: [usize; 3],
 }
 
+/// In-plane extent `[u_lo, u_hi, v_lo, v_hi]` of the pixels inside, on a
+/// slice `w` pixels wide; `None` when there are none.
+fn extent(inside: &[bool], w: usize) -> Option<[usize; 4]> {
+    let mut e: Option<[usize; 4]> = None;
+    for (p, _) in inside.iter().enumerate().filter(|(_, x)| **x) {
+        let (u, v) = (p % w, p / w);
+        let x = e.get_or_insert([u, u, v, v]);
+        *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
+    }
+    e
+}
+
+/// The largest step, in pixels, of any side of the outlines' extent between
+/// two consecutive drawn slices that show the label: how far an object can
+/// be followed from one drawn slice to the next.
+pub fn drift(extents: &[Option<[usize; 4]>]) -> usize {
+    let shown: Vec<&[usize; 4]> = extents.iter().flatten().collect();
+    shown
+        .windows(2)
+        .flat_map(|p| (0..4).map(move |i| p[0][i].abs_diff(p[1][i])))
+        .max()
+        .unwrap_or(0)
+}
+
 /// One drawn slice of a label: its index and its whole-structure mask
 /// (row-major `width * height`, as [`Volume::slice`] gives).
+#[derive(Clone, Copy)]
 pub struct DrawnSlice<'a> {
     /// Index along the axis.
     pub index: usize,
@@ -48,29 +94,35 @@ pub struct DrawnSlice<'a> {
 
 impl LabelBox {
     /// The box of a label drawn on `slices` (sorted by index) of a volume of
-    /// `dims` along `axis`, or `None` when the label is on no drawn slice or
-    /// the box is the whole volume (nothing to gain).
-    pub fn of(dims: [usize; 3], axis: Axis, slices: &[DrawnSlice<'_>]) -> Option<LabelBox> {
+    /// `dims` along `axis` for a method that reads as far as `reach`, or
+    /// `None` when the label is on no drawn slice, the method reads the whole
+    /// volume, or the box is the whole volume (nothing to gain).
+    pub fn of(
+        dims: [usize; 3],
+        axis: Axis,
+        slices: &[DrawnSlice<'_>],
+        reach: BoxReach,
+    ) -> Option<LabelBox> {
         let (a, b) = axis.in_plane();
         let (w, h) = (dims[a], dims[b]);
-        // In-plane extent of every outline: [u_lo, u_hi] x [v_lo, v_hi].
-        let mut ext: Option<[usize; 4]> = None;
-        let mut first = None;
-        let mut last = None;
-        for (n, s) in slices.iter().enumerate() {
-            let mut any = false;
-            for (p, _) in s.inside.iter().enumerate().filter(|(_, x)| **x) {
-                let (u, v) = (p % w, p / w);
-                any = true;
-                let e = ext.get_or_insert([u, u, v, v]);
-                *e = [e[0].min(u), e[1].max(u), e[2].min(v), e[3].max(v)];
-            }
-            if any {
-                first.get_or_insert(n);
-                last = Some(n);
-            }
-        }
+        // In-plane extent of each drawn slice's outlines: [u_lo, u_hi, v_lo, v_hi].
+        let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| extent(s.inside, w)).collect();
+        let first = extents.iter().position(Option::is_some);
+        let last = extents.iter().rposition(Option::is_some);
+        let ext = extents.iter().flatten().copied().reduce(|e, x| {
+            [
+                e[0].min(x[0]),
+                e[1].max(x[1]),
+                e[2].min(x[2]),
+                e[3].max(x[3]),
+            ]
+        });
         let ([u0, u1, v0, v1], first, last) = (ext?, first?, last?);
+        let margin = match reach {
+            BoxReach::Whole => return None,
+            BoxReach::Outline => MARGIN,
+            BoxReach::Drift => MARGIN + 3 * drift(&extents),
+        };
         let along_lo = first
             .checked_sub(AXIS_SLICES)
             .map_or(0, |p| slices[p].index);
@@ -79,10 +131,10 @@ impl LabelBox {
             .map_or(dims[axis.dim()] - 1, |s| s.index);
         let mut lo = [0; 3];
         let mut hi = [0; 3];
-        lo[a] = u0.saturating_sub(MARGIN);
-        hi[a] = (u1 + MARGIN).min(w - 1);
-        lo[b] = v0.saturating_sub(MARGIN);
-        hi[b] = (v1 + MARGIN).min(h - 1);
+        lo[a] = u0.saturating_sub(margin);
+        hi[a] = (u1 + margin).min(w - 1);
+        lo[b] = v0.saturating_sub(margin);
+        hi[b] = (v1 + margin).min(h - 1);
         lo[axis.dim()] = along_lo;
         hi[axis.dim()] = along_hi;
         let b = LabelBox {
@@ -213,17 +265,37 @@ mod tests {
             at(15, &off),
             at(18, &off),
         ];
-        let b = LabelBox::of(dims, Axis::Z, &slices).unwrap();
+        let b = LabelBox::of(dims, Axis::Z, &slices, BoxReach::Outline).unwrap();
         assert_eq!(b.lo, [3, 2, 0]);
         assert_eq!(b.dims, [3 + 2 * MARGIN, 2 + 2 * MARGIN, 16]);
+        assert_eq!(LabelBox::of(dims, Axis::Z, &slices, BoxReach::Whole), None);
+        // The outline moves one pixel right on z = 9: a drift of 1.
+        let mut moved = vec![false; 200];
+        for v in 4..6 {
+            for u in 6..9 {
+                moved[u + 20 * v] = true;
+            }
+        }
+        let mut drifting = slices;
+        drifting[3] = at(9, &moved);
+        let d = LabelBox::of(dims, Axis::Z, &drifting, BoxReach::Drift).unwrap();
+        // A margin of MARGIN + 3 = 5 around u 5..=8, v 4..=5, cut at the
+        // volume's sides (v runs 0..10).
+        assert_eq!(d.lo, [0, 0, 0]);
+        assert_eq!(d.dims, [8 + 5 + 1, 10, 16]);
         // Nothing drawn: no box; a box as large as the volume: none either.
         assert_eq!(
-            LabelBox::of(dims, Axis::Z, &[at(0, &off), at(5, &off)]),
+            LabelBox::of(
+                dims,
+                Axis::Z,
+                &[at(0, &off), at(5, &off)],
+                BoxReach::Outline
+            ),
             None
         );
         let all = vec![true; 200];
         assert_eq!(
-            LabelBox::of(dims, Axis::Z, &[at(0, &all), at(29, &all)]),
+            LabelBox::of(dims, Axis::Z, &[at(0, &all), at(29, &all)], BoxReach::Drift),
             None
         );
     }

@@ -9,10 +9,11 @@
 //! label's own mask. Holes holding background stay holes. Painting in
 //! ascending order then reproduces every drawn slice exactly.
 //!
-//! A method that stays within its tracing ([`Interpolator::bounded_by_tracing`])
-//! runs on the label's box only ([`crate::crop`]), with the same result.
+//! A method that reads no further than its tracing's surroundings
+//! ([`Interpolator::box_reach`]) runs on the label's box only
+//! ([`crate::crop`]).
 use crate::crop::{DrawnSlice, LabelBox};
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
 use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume};
@@ -73,14 +74,14 @@ fn run(
         .par_iter()
         .map(|&l| {
             let filled = traced_slices(sparse, axis, &drawn, l);
-            if method.bounded_by_tracing() && !confidence {
+            if method.box_reach() != BoxReach::Whole && !confidence {
                 let slices: Vec<DrawnSlice<'_>> = drawn
                     .iter()
                     .zip(&filled)
                     .map(|(&index, inside)| DrawnSlice { index, inside })
                     .collect();
                 let dims = sparse.geometry().dims;
-                if let Some(b) = LabelBox::of(dims, axis, &slices)
+                if let Some(b) = LabelBox::of(dims, axis, &slices, method.box_reach())
                     && let Some(m) = b.interpolate(method, sparse.geometry(), axis, &slices)?
                 {
                     return Ok((Piece::Boxed(b, m), None));

@@ -17,6 +17,9 @@
 //!   the skipped slices may show a single, distorted shape or self-crossings;
 //! - nearest-point pairing slides along strongly shifted or rotated contours.
 use crate::slices::{Plane, assemble, bracket, drawn_slices};
+// Not run on a label's box: its moved contours are rounded at absolute pixel
+// positions and ties in the nearest-point pairing follow the tracing order,
+// so a shifted box can move a voxel on a pixel boundary.
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::raster::rasterize_polygons;
@@ -28,10 +31,6 @@ use rayon::prelude::*;
 pub struct Linear;
 
 impl Interpolator for Linear {
-    fn bounded_by_tracing(&self) -> bool {
-        true
-    }
-
     fn name(&self) -> &'static str {
         "linear"
     }

@@ -1,4 +1,5 @@
 //! The interpolator trait shared by every method.
+pub use crate::crop::BoxReach;
 use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, Cancel, Mask, Volume};
 use thiserror::Error;
@@ -85,13 +86,12 @@ pub trait Interpolator: Send + Sync {
         let c = crate::confidence::shape_confidence(&m, &input, 1.0);
         Ok((m, c))
     }
-    /// True when the result never leaves the in-plane bounding box of the
-    /// drawn outlines nor the drawn slices around the first and last drawn
-    /// slice that show the label: the runner then works on that box alone
-    /// ([`crate::crop`]). Image-aware methods (whose statistics depend on
-    /// the surroundings) and mesh methods keep the default, `false`.
-    fn bounded_by_tracing(&self) -> bool {
-        false
+    /// How far past the label's drawn outlines the method reads, so that
+    /// the runner can work on the label's box alone ([`crate::crop`]).
+    /// Image-aware methods (whose statistics depend on the surroundings)
+    /// and mesh methods keep the default, [`BoxReach::Whole`].
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Whole
     }
     /// The same method for a compact stack of the slices `real` along `axis`
     /// (leave-one-out predicts a drawn slice from such a stack,

@@ -4,7 +4,7 @@
 //! appear and vanish between drawn slices it is hard to beat. Nothing is
 //! produced outside the drawn range.
 use crate::slices::{assemble, bracket, drawn_slices};
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 
 /// Nearest-slice copy.
@@ -12,8 +12,8 @@ use interslice_core::Mask;
 pub struct Nearest;
 
 impl Interpolator for Nearest {
-    fn bounded_by_tracing(&self) -> bool {
-        true
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Outline
     }
 
     fn name(&self) -> &'static str {

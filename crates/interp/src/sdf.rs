@@ -37,6 +37,14 @@ pub fn signed_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
         .collect()
 }
 
+/// "No object near": the value of the drawn-empty slices that have no
+/// non-empty drawn neighbour in the blends and slopes of the shape methods,
+/// and of a group's map past its crop. Finite, so the arithmetic stays
+/// defined (no `∞ − ∞`, no `0 · ∞`), and independent of the slice's size, so
+/// that a label's box ([`crate::crop`]) computes what the whole volume does;
+/// this far out, PCHIP's slope next to such a slice has reached its limit.
+pub const FAR: f32 = 1.0e20;
+
 /// The distance used for "no object on this slice": the slice's diagonal,
 /// farther than any pixel can be from an object on the slice.
 pub fn empty_value(plane: &Plane) -> f32 {
@@ -57,7 +65,7 @@ pub fn empty_value(plane: &Plane) -> f32 {
 /// everywhere (the empty slice stays empty, `< 0` is never true on it) and
 /// touches 0 at the deepest point of the neighbour, so a linear blend erodes
 /// the object to a point on the empty slice: a cone, not a cut. An empty
-/// slice without non-empty neighbours gets [`empty_value`].
+/// slice without non-empty neighbours gets [`FAR`].
 pub fn drawn_maps(
     input: &SparseMask<'_>,
     plane: &Plane,
@@ -101,7 +109,7 @@ pub fn drawn_maps(
         .collect();
     input.check_cancelled()?;
     let depth = |m: &[f32]| -m.iter().copied().fold(0.0f32, f32::min);
-    let far = empty_value(plane);
+    let far = FAR;
     Ok((0..n)
         .into_par_iter()
         .map(|i| {

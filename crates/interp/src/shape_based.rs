@@ -12,7 +12,7 @@
 //! its two positions, and an object on one side only is coned, not capped.
 use crate::sdf::drawn_maps;
 use crate::slices::{Plane, assemble, bracket};
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 
 /// Linear blending of signed distance maps.
@@ -40,8 +40,8 @@ pub fn drawn_sdfs(
 }
 
 impl Interpolator for ShapeBased {
-    fn bounded_by_tracing(&self) -> bool {
-        true
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Outline
     }
 
     fn name(&self) -> &'static str {

@@ -6,7 +6,7 @@
 //! drawn slices that both lack it.
 use crate::shape_based::drawn_sdfs;
 use crate::slices::{Plane, assemble, bracket};
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 
 /// Monotone cubic blending of signed distance maps.
@@ -39,6 +39,10 @@ pub fn hermite(y0: f32, y1: f32, m0: f32, m1: f32, h: f32, t: f32) -> f32 {
 }
 
 impl Interpolator for ShapeCubic {
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Outline
+    }
+
     fn name(&self) -> &'static str {
         "shape-cubic"
     }
@@ -53,28 +57,31 @@ impl Interpolator for ShapeCubic {
         let sdfs = drawn_sdfs(&input, &plane, 1)?;
         let drawn = input.drawn;
         let n = drawn.len();
-        let z = |i: usize| drawn[i] as f32 * plane.slice_spacing as f32;
+        // Lengths from index differences, not from positions: the same on a
+        // label's box (indices shifted) as on the whole volume.
+        let len = |i: usize, j: usize| (drawn[j] - drawn[i]) as f32 * plane.slice_spacing as f32;
         assemble(&input, |s| {
             let g = bracket(drawn, s)?;
-            let h = z(g + 1) - z(g);
+            let h = len(g, g + 1);
             let t = (s - drawn[g]) as f32 / (drawn[g + 1] - drawn[g]) as f32;
             let y0 = sdfs[g].as_ref().expect("gap border");
             let y1 = sdfs[g + 1].as_ref().expect("gap border");
-            let prev = (g > 0).then(|| {
-                (
-                    sdfs[g - 1].as_ref().expect("gap neighbour"),
-                    z(g) - z(g - 1),
-                )
-            });
+            let prev =
+                (g > 0).then(|| (sdfs[g - 1].as_ref().expect("gap neighbour"), len(g - 1, g)));
             let next = (g + 2 < n).then(|| {
                 (
                     sdfs[g + 2].as_ref().expect("gap neighbour"),
-                    z(g + 2) - z(g + 1),
+                    len(g + 1, g + 2),
                 )
             });
             let mut out = vec![false; plane.len()];
             for p in 0..plane.len() {
                 let (a, b) = (y0[p], y1[p]);
+                // PCHIP's cubic is monotone between `a` and `b`.
+                if (a < 0.0) == (b < 0.0) {
+                    out[p] = a < 0.0;
+                    continue;
+                }
                 let sec = (b - a) / h;
                 let m0 = match prev {
                     Some((yp, hp)) => pchip_slope((a - yp[p]) / hp, sec, hp, h),

@@ -44,10 +44,10 @@
 //!
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
-use crate::sdf::{drawn_maps, empty_value, signed_distance};
+use crate::sdf::{FAR, drawn_maps, signed_distance};
 use crate::shape_cubic::pchip_slope;
 use crate::slices::{Plane, assemble};
-use crate::{InterpError, Interpolator, SparseMask};
+use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::edt::squared_edt_2d_f32;
 use interslice_core::morph::Connectivity;
@@ -96,7 +96,6 @@ struct Crop {
     w: usize,
     h: usize,
     d: Vec<f32>,
-    far: f32,
 }
 
 impl Crop {
@@ -125,6 +124,18 @@ impl Crop {
         let u1 = (bb[2] + margin).min(plane.width);
         let v1 = (bb[3] + margin).min(plane.height);
         let (w, h) = (u1 - u0, v1 - v0);
+        if comps.len() == slice.comps.len() {
+            // The group is the whole foreground, and the crop holds it with
+            // its ring of background (or the slice's own edge): its distances
+            // are the whole slice's, already computed.
+            let d = (0..h)
+                .flat_map(|v| {
+                    let row = u0 + plane.width * (v0 + v);
+                    slice.sdf[row..row + w].iter().copied()
+                })
+                .collect();
+            return Crop { u0, v0, w, h, d };
+        }
         let mut m = vec![false; w * h];
         for v in 0..h {
             for u in 0..w {
@@ -151,14 +162,7 @@ impl Crop {
                 .map(|(&x, (&o, &i))| if x { -i.sqrt() } else { o.sqrt() })
                 .collect()
         };
-        Crop {
-            u0,
-            v0,
-            w,
-            h,
-            d,
-            far: empty_value(plane),
-        }
+        Crop { u0, v0, w, h, d }
     }
 
     /// Bilinear sample at pixel-index position (pu, pv) of the full slice
@@ -168,7 +172,7 @@ impl Crop {
         let x = pu - self.u0 as f64;
         let y = pv - self.v0 as f64;
         if x < 0.0 || y < 0.0 || x > (self.w - 1) as f64 || y > (self.h - 1) as f64 {
-            return self.far;
+            return FAR;
         }
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(self.w - 1), (y0 + 1).min(self.h - 1));
@@ -395,6 +399,10 @@ struct Neighbour<'a> {
 }
 
 impl Interpolator for ShapeAligned {
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Drift
+    }
+
     fn name(&self) -> &'static str {
         "shape-aligned"
     }
@@ -617,6 +625,16 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
             let (pu, pv) = (u as f64, v as f64);
             let ya = ca.sample(pu + sa[0], pv + sa[1]);
             let yb = cb.sample(pu + sb[0], pv + sb[1]);
+            // The slopes are PCHIP's (same sign as the secant, at most three
+            // times it), so the cubic is monotone between `ya` and `yb`
+            // (Fritsch & Carlson 1980): where both sides agree, so does it,
+            // and the neighbouring slices need not be read.
+            if (ya < 0.0) == (yb < 0.0) {
+                if ya < 0.0 {
+                    out[u + plane.width * v] = true;
+                }
+                continue;
+            }
             let sec = (yb - ya) / hf;
             // Slopes from the whole neighbouring slices, sampled where the
             // moving frame would be on them, minus this pair's whole-slice
