@@ -9,6 +9,7 @@ use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interp
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Interpolate the slices between the drawn slices of a label array, as
@@ -162,14 +163,14 @@ impl Tracing {
 
 /// `labels` as an array of the element type of `_like` (every label fits:
 /// they come from that array).
-fn like<'py, T: Element + FromLabel + Default>(
+fn like<'py, T: Element + FromLabel + Default + Send>(
     py: Python<'py>,
     _like: &PyReadonlyArray3<'_, T>,
     labels: &[u16],
     dims: [usize; 3],
 ) -> PyResult<Bound<'py, PyAny>> {
     let data: Vec<T> = labels
-        .iter()
+        .par_iter()
         .map(|&l| T::from_label(l).unwrap_or_default())
         .collect();
     Ok(to_numpy(py, data, dims)?.into_any())
