@@ -9,7 +9,7 @@ of each library's time to interslice's, on the same arrays:
   HD95), MONAI, medpy and DeepMind's surface-distance;
 * overlap only at the same sizes: ``interslice.overlap`` against SimpleITK's
   LabelOverlapMeasuresImageFilter, medpy and MONAI;
-* interpolation of a phantom nucleus traced on every 5th z slice:
+* interpolation of a phantom nucleus traced on every 5th z slice (--skip):
   ``interslice.interpolate`` against ITK's morphological contour
   interpolation and a plain scipy signed-distance blend (the approach of the
   existing napari plugins), with the Dice of each against the truth.
@@ -21,6 +21,7 @@ Install the comparison libraries with
 ``pip install SimpleITK itk-morphologicalcontourinterpolation medpy monai surface-distance scipy``.
 
     python python/bench/compare.py [--sizes 256,512] [--reps 3] [--threads 2] [--slow] [--cache DIR]
+                                   [--only interpolation --phantom 256 --skip 9]
 """
 
 import argparse
@@ -44,6 +45,7 @@ def parse():
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     ap.add_argument("--slow", action="store_true", help="also run medpy and surface-distance at 512³ (minutes each)")
     ap.add_argument("--phantom", type=int, default=256, help="phantom size for the interpolation rows")
+    ap.add_argument("--skip", type=int, default=4, help="slices skipped between traced ones for the interpolation rows (4: every 5th)")
     ap.add_argument("--only", default="", help="comma-separated sections: distance,overlap,interpolation")
     ap.add_argument("--cache", default="", help="folder to keep the generated blob pairs in (.npy), to skip generating them again")
     return ap.parse_args()
@@ -308,10 +310,11 @@ def dice(a, b):
 
 def interpolation_section():
     n = args.phantom
-    print(f"\n== interpolation: phantom nucleus {n}³, traced on every 5th z slice", flush=True)
+    step = args.skip + 1
+    print(f"\n== interpolation: phantom nucleus {n}³, traced on every {step}th z slice", flush=True)
     _, labels, meta = interslice.phantom(size=n, seed=1)
     truth = (labels >= 2).astype(np.uint8).T  # [z, y, x], nucleus with its nucleoli
-    drawn = [z for z in range(0, n, 5)]
+    drawn = [z for z in range(0, n, step)]
     sparse = np.zeros_like(truth)
     sparse[drawn] = truth[drawn]
     sp = meta["spacing"]
