@@ -63,14 +63,19 @@ fn write_file(path: &Path, file: &ContourFile) {
     std::fs::write(path, contour_file::write(file).unwrap()).unwrap();
 }
 
-fn interpolate(json: &Path, out: &Path) -> LabelVolume {
-    let o = bin()
+/// `interslice interpolate JSON --out OUT`, as run.
+fn run_interpolate(json: &Path, out: &Path) -> std::process::Output {
+    bin()
         .arg("interpolate")
         .arg(json)
         .arg("--out")
         .arg(out)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+fn interpolate(json: &Path, out: &Path) -> LabelVolume {
+    let o = run_interpolate(json, out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     interslice_io::read_labels(out).unwrap()
 }
@@ -140,13 +145,7 @@ fn contradicting_crossings_and_an_unknown_axis_are_one_line_errors() {
     let json = dir.path().join("bad.json");
     write_file(&json, &file);
     let out = dir.path().join("o.nii.gz");
-    let o = bin()
-        .arg("interpolate")
-        .arg(&json)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_interpolate(&json, &out);
     assert_one_line_error(&o, "label 1: drawn slices z=");
     assert_one_line_error(&o, "contradict where they cross");
     assert!(!out.exists());
@@ -158,12 +157,6 @@ fn contradicting_crossings_and_an_unknown_axis_are_one_line_errors() {
         .replace("\"axis\":\"x\"", "\"axis\":\"w\"");
     assert!(text.contains("\"axis\":\"w\""));
     std::fs::write(&json, text).unwrap();
-    let o = bin()
-        .arg("interpolate")
-        .arg(&json)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_interpolate(&json, &out);
     assert_one_line_error(&o, "expected one of `x`, `y`, `z`");
 }

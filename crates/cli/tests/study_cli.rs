@@ -3,19 +3,25 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// The exact labels of a 48³ phantom cell, written to a temporary folder.
-fn phantom_ground_truth() -> (tempfile::TempDir, PathBuf) {
+/// The exact labels of a `size`³ phantom cell, written to `name` in a
+/// temporary folder.
+fn phantom_ground_truth_of(size: usize, seed: u64, name: &str) -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
-        size: 48,
-        seed: 3,
+        size,
+        seed,
         bits: 8,
         noise: 0.0,
     })
     .unwrap();
-    let gt = dir.path().join("gt.nii.gz");
+    let gt = dir.path().join(name);
     interslice_io::write_labels(&gt, &p.labels).unwrap();
     (dir, gt)
+}
+
+/// The exact labels of a 48³ phantom cell, as `.nii.gz`.
+fn phantom_ground_truth() -> (tempfile::TempDir, PathBuf) {
+    phantom_ground_truth_of(48, 3, "gt.nii.gz")
 }
 
 #[test]
@@ -212,7 +218,7 @@ fn study_prints_minutes_per_cell_for_a_simulated_tracer() {
 
 #[test]
 fn study_rejects_bad_arguments() {
-    let dir = tempfile::tempdir().unwrap();
+    let (dir, gt) = phantom_ground_truth_of(32, 1, "gt.nrrd");
     let run = |args: &[&str]| {
         let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
             .arg("study")
@@ -222,15 +228,6 @@ fn study_rejects_bad_arguments() {
         assert!(!r.status.success());
         String::from_utf8_lossy(&r.stderr).to_string()
     };
-    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
-        size: 32,
-        seed: 1,
-        bits: 8,
-        noise: 0.0,
-    })
-    .unwrap();
-    let gt = dir.path().join("gt.nrrd");
-    interslice_io::write_labels(&gt, &p.labels).unwrap();
     let gt = gt.to_str().unwrap();
     let out = dir.path().join("o");
     let out = out.to_str().unwrap();
