@@ -632,6 +632,8 @@ export interface components {
              * @description Foreground voxels.
              */
             voxels: number;
+            recommended_method?: string | null;
+            image_weight?: number | null;
         };
         /** @description Body of `POST /api/cells/{cell}/interpolate`. */
         InterpolateBody: {
@@ -650,6 +652,8 @@ export interface components {
              *     as a result.
              */
             preview?: boolean;
+            confidence?: boolean;
+            recommend?: boolean;
         };
         /** @description Body of `POST /api/login`. */
         LoginBody: {
@@ -706,6 +710,7 @@ export interface components {
             drawn: boolean;
             /** @description Slice index. */
             index: number;
+            uncertain?: number[][][] | null;
         };
         /** @description Body of `POST /api/cells/{cell}/ratings`. */
         RatingBody: {

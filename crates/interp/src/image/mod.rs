@@ -98,6 +98,13 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Whether the fusion reads the image (leave-one-out chose a weight
+    /// `w > 0` and the drawn slices gave an intensity model); when not, the
+    /// method's result is its shape prior, bit for bit.
+    pub fn uses_image(&self) -> bool {
+        self.params.w > 0.0 && self.model.is_some()
+    }
+
     /// The prior's scale `τ` at `delta` slices from the nearest drawn slice:
     /// the held-out boundary error scaled linearly with the distance.
     pub fn tau(&self, delta: f64) -> f32 {
@@ -270,7 +277,7 @@ impl ImageGuided {
         let plan = self.plan(input)?;
         input.check_cancelled()?;
         let prior = candidates()[plan.prior].interpolate(*input)?;
-        let Some(model) = plan.model.as_ref().filter(|_| plan.params.w > 0.0) else {
+        let Some(model) = plan.model.as_ref().filter(|_| plan.uses_image()) else {
             let c = confidence.then(|| shape_confidence(&prior, input, plan.scale));
             return Ok((prior, c));
         };
