@@ -607,12 +607,23 @@ export interface components {
             /** @description Axis. */
             axis: string;
             /**
+             * Format: float
+             * @description With `recommend`: the image weight leave-one-out chose (0: the image
+             *     did not help).
+             */
+            image_weight?: number | null;
+            /**
              * Format: int32
              * @description Label id.
              */
             label: number;
             /** @description Method used. */
             method: string;
+            /**
+             * @description With `recommend`: `image-guided` when its leave-one-out on the drawn
+             *     slices uses the cell's image, else the shape default.
+             */
+            recommended_method?: string | null;
             /**
              * Format: int64
              * @description Id of the stored result (for the mesh).
@@ -632,13 +643,16 @@ export interface components {
              * @description Foreground voxels.
              */
             voxels: number;
-            recommended_method?: string | null;
-            image_weight?: number | null;
         };
         /** @description Body of `POST /api/cells/{cell}/interpolate`. */
         InterpolateBody: {
             /** @description Axis of the drawn slices. */
             axis: string;
+            /**
+             * @description Also outline, on each skipped slice, where the result is unsure
+             *     (`PreviewSlice.uncertain`).
+             */
+            confidence?: boolean;
             /**
              * Format: int32
              * @description Label id.
@@ -652,7 +666,11 @@ export interface components {
              *     as a result.
              */
             preview?: boolean;
-            confidence?: boolean;
+            /**
+             * @description Also say which method leave-one-out recommends for this label and
+             *     axis (`recommended_method`, `image_weight`); with no `method`, the
+             *     result is the recommended method's.
+             */
             recommend?: boolean;
         };
         /** @description Body of `POST /api/login`. */
@@ -710,6 +728,11 @@ export interface components {
             drawn: boolean;
             /** @description Slice index. */
             index: number;
+            /**
+             * @description With `confidence`, on a slice not drawn: the outlines (same
+             *     coordinates as `contours`) of the pixels whose confidence is below
+             *     0.75 (`UNCERTAIN_BELOW`), empty where the result is sure everywhere.
+             */
             uncertain?: number[][][] | null;
         };
         /** @description Body of `POST /api/cells/{cell}/ratings`. */

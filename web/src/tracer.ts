@@ -373,7 +373,8 @@ export class Tracer {
   private overlay(a: Axis, idx: number, working: boolean): Overlay {
     const t: Traced = {
       contours: this.tracings.contours,
-      previews: this.previews.all(),
+      // An array: the working view reads it twice (contours, tints).
+      previews: [...this.previews.all()],
       axis: this.st.axis,
       label: this.st.label,
       colorOf: (l) => this.labelOf(l).color,
