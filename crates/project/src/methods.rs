@@ -45,7 +45,6 @@ const IMAGE_DESCRIPTION: &str = "shape prior fused with the cell's intensities, 
 
 /// Which method a tracing of one label along one axis is best interpolated
 /// with on its cell, as leave-one-out on the drawn slices decides it.
-#[derive(Debug, Clone, PartialEq)]
 pub struct Recommendation {
     /// [`IMAGE_METHOD`] when the image-guided method's leave-one-out uses
     /// the image, else the shape default ([`interslice_interp::DEFAULT_METHOD`]),
@@ -53,6 +52,9 @@ pub struct Recommendation {
     pub method: &'static str,
     /// The weight of the image that leave-one-out chose (0: shape only).
     pub image_weight: f32,
+    /// The method itself, ready to interpolate the tracing (the
+    /// image-guided one keeps its plan, so leave-one-out runs once).
+    pub interpolator: Box<dyn Interpolator>,
 }
 
 /// The [`Recommendation`] for `label` along `axis` of `tracing` on the cell
@@ -70,24 +72,26 @@ pub fn recommend(
 ) -> Result<Recommendation, ProjectError> {
     cancel.check()?;
     let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
-    if drawn.len() < 3 {
-        return Ok(Recommendation {
+    let shape = || -> Result<Recommendation, ProjectError> {
+        Ok(Recommendation {
             method: DEFAULT_METHOD,
             image_weight: 0.0,
-        });
+            interpolator: method_by_name(None)?,
+        })
+    };
+    if drawn.len() < 3 {
+        return shape();
     }
     let input = SparseMask::new(&mask, axis, &drawn).with_cancel(cancel);
-    let plan = ImageGuided::new(image).plan(&input)?;
+    let guided = ImageGuided::new(image);
+    let plan = guided.plan(&input)?;
     cancel.check()?;
-    Ok(if plan.uses_image() {
-        Recommendation {
-            method: IMAGE_METHOD,
-            image_weight: plan.params.w,
-        }
-    } else {
-        Recommendation {
-            method: DEFAULT_METHOD,
-            image_weight: 0.0,
-        }
+    if !plan.uses_image() {
+        return shape();
+    }
+    Ok(Recommendation {
+        method: IMAGE_METHOD,
+        image_weight: plan.params.w,
+        interpolator: Box::new(guided.with_plan(&input, plan)),
     })
 }

@@ -201,6 +201,15 @@ fn the_recommended_method_is_image_guided_where_the_image_shows_the_nucleus_only
         a["method"], "image-guided",
         "no method named: the recommended one"
     );
+    // Planned once for the recommendation and reused: the same result as
+    // the image-guided method named.
+    let named = interpolate(
+        &alice,
+        "phantom",
+        json!({"label": 1, "axis": "z", "preview": true, "method": "image-guided"}),
+    );
+    assert_eq!(named["voxels"], a["voxels"]);
+    assert_eq!(named["slices"], a["slices"]);
     let b = interpolate(&alice, "noise", body);
     assert_eq!(b["recommended_method"], "shape-auto");
     assert_eq!(b["image_weight"], 0.0);

@@ -130,9 +130,12 @@ pub(super) async fn interpolate(
         } else {
             None
         };
-        let method = match named {
-            Some(m) => m,
-            None => method_for_cell(rec.as_ref().map(|r| r.method), &c)?,
+        let answer_rec = rec.as_ref().map(|r| (r.method, r.image_weight));
+        // The recommended method comes planned: leave-one-out runs once.
+        let method = match (named, rec) {
+            (Some(m), _) => m,
+            (None, Some(r)) => r.interpolator,
+            (None, None) => method_for_cell(None, &c)?,
         };
         let (mask, drawn, confidence) = if body.confidence {
             let (m, d, conf) = groundtruth::interpolate_label_with_confidence(
@@ -174,8 +177,8 @@ pub(super) async fn interpolate(
             volume: voxels as f64 * g.voxel_volume(),
             unit: format!("{}³", g.unit.symbol()),
             voxels,
-            recommended_method: rec.as_ref().map(|r| r.method.to_string()),
-            image_weight: rec.as_ref().map(|r| r.image_weight),
+            recommended_method: answer_rec.map(|r| r.0.to_string()),
+            image_weight: answer_rec.map(|r| r.1),
         })
     })
     .await?;
