@@ -425,6 +425,7 @@ export class Tracer {
     void this.tracings.reloadDrawn(this.target).then(() => {
       this.paintAll();
       this.updateStatus();
+      this.showMethodNote();
       const { label, axis } = this.target;
       if (this.tracings.drawn.size > 0 && !this.previews.get(label, axis)) void this.runPreview(false);
       this.advisor.refresh();
@@ -618,6 +619,7 @@ export class Tracer {
   private showPreview(label: number, r: InterpResult | null, explicit: boolean): void {
     if (!r) {
       this.el.volume.textContent = "";
+      this.showMethodNote();
       if (explicit) this.host.toast("draw at least one contour first");
       return;
     }
