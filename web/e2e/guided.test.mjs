@@ -148,7 +148,6 @@ test("the uncertainty tint on a skipped slice, and the recommended method named"
   await painted(page);
   const after = await warmPixels(page, "z");
   assert.ok(after > before + 50, `tinted pixels on z=${skipped}: ${before} -> ${after}`);
-  await shot(page, "uncertainty");
   // No method picked: the preview used the recommended one and the note says which and why.
   const s = await summary();
   assert.equal(await page.getByTestId("method-select").inputValue(), "");
@@ -158,6 +157,17 @@ test("the uncertainty tint on a skipped slice, and the recommended method named"
   const why =
     s.recommended === "image-guided" ? "the image predicts your drawn slices better" : "the image did not help";
   assert.equal(note, `${s.recommended}: ${why}`);
+  // The shape default picked: no reason is needed, and its band (wider than the image's) for the screenshot.
+  await page.getByTestId("method-select").selectOption("shape-auto");
+  await page.waitForFunction(() => window.__interslice.tracer().summary().method === "shape-auto");
+  await idle();
+  await painted(page);
+  assert.equal(await page.getByTestId("method-note").textContent(), "");
+  assert.ok((await warmPixels(page, "z")) > after, "the shape is less sure than the image");
+  await shot(page, "uncertainty");
+  await page.getByTestId("method-select").selectOption("");
+  await page.waitForFunction(() => window.__interslice.tracer().summary().recommended !== null);
+  await idle();
   // Off again: the tint goes, the preview stays.
   await page.getByTestId("show-uncertainty").uncheck();
   await painted(page);
