@@ -14,14 +14,18 @@ use serde_json::{Value, json};
 
 /// Trace `truth` on the z slices `zs` (exact crack outlines, holes left out).
 fn trace(client: &Client, cell: &str, truth: &Mask, zs: &[usize]) {
-    let (w, h) = truth.slice_shape(Axis::Z);
+    trace_along(client, cell, truth, Axis::Z, zs);
+}
+
+fn trace_along(client: &Client, cell: &str, truth: &Mask, axis: Axis, zs: &[usize]) {
+    let (w, h) = truth.slice_shape(axis);
     for &k in zs {
-        let s = truth.slice(Axis::Z, k).unwrap();
+        let s = truth.slice(axis, k).unwrap();
         for points in mask_polygons(&s, w, h)
             .into_iter()
             .filter(|p| signed_area(p) > 0.0)
         {
-            let body = json!({"label": 1, "axis": "z", "index": k, "points": points});
+            let body = json!({"label": 1, "axis": axis.to_string(), "index": k, "points": points});
             let url = format!("/api/cells/{cell}/contours");
             expect(&client.json("POST", &url, &body).unwrap(), 201);
         }
@@ -143,6 +147,26 @@ fn confidence_outlines_the_uncertain_pixels_of_skipped_slices_beside_the_contour
             .abs()
     };
     assert!(band(14) > band(13), "{} vs {}", band(14), band(13));
+
+    // Also drawn across the axis: the combined mask's confidence, still
+    // none on the drawn z slices.
+    trace_along(&alice, "cell_01", &truth, Axis::X, &[15]);
+    let both = interpolate(
+        &alice,
+        "cell_01",
+        json!({"label": 1, "axis": "z", "preview": true, "confidence": true}),
+    );
+    let slices = both["slices"].as_array().unwrap();
+    for s in slices {
+        let drawn = s["drawn"].as_bool().unwrap();
+        assert_eq!(s.get("uncertain").is_some(), !drawn, "{}", s["index"]);
+    }
+    assert!(
+        slices
+            .iter()
+            .filter(|s| s["drawn"] == false)
+            .any(|s| !polygons(&s["uncertain"]).is_empty())
+    );
 }
 
 /// A 64³ phantom cell (noise 10 %) with its nucleus, and a cell of the same
