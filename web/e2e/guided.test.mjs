@@ -3,7 +3,9 @@
 // follow the suggestion key (G) three times, each time landing on the slice
 // the badge on the working view names and tracing it; then trace one x slice
 // through the nucleus on the x view; the export reproduces every traced slice
-// of both orientations and matches the phantom's nucleus.
+// of both orientations and matches the phantom's nucleus. Before the x slice,
+// the uncertainty tint (U) shows on a skipped z slice and the line under the
+// method menu names the method leave-one-out recommended.
 import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
@@ -12,6 +14,7 @@ import {
   cli,
   densify,
   outlines,
+  painted,
   penStroke,
   readNiftiU8,
   shot,
@@ -107,6 +110,68 @@ test("trace the outermost slices, then follow the suggestion key three times", a
   assert.equal(sum.pending, 0);
   const advice = await page.getByTestId("advice").textContent();
   assert.match(advice, /predicted Dice 0\.\d{3}/);
+});
+
+/** Pixels of view `axis` that the warm uncertainty tint (orange over grey) could be. */
+function warmPixels(page, axis) {
+  return page.evaluate((a) => {
+    const c = document.querySelector(`[data-testid="view-${a}"]`);
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let o = 0; o < d.length; o += 4) {
+      const rb = d[o] - d[o + 2];
+      const gb = d[o + 1] - d[o + 2];
+      if (rb > 80 && gb > 35 && gb < 80) n++;
+    }
+    return n;
+  }, axis);
+}
+
+test("the uncertainty tint on a skipped slice, and the recommended method named", async () => {
+  const { page } = br;
+  // The middle of the widest gap between traced slices.
+  const t = [...traced].sort((a, b) => a - b);
+  let gap = 0;
+  for (let i = 1; i < t.length; i++) if (t[i] - t[i - 1] > t[gap + 1] - t[gap]) gap = i - 1;
+  const skipped = Math.floor((t[gap] + t[gap + 1]) / 2);
+  assert.ok(!traced.includes(skipped));
+  await gotoSlice(skipped);
+  await idle();
+  await painted(page);
+  const before = await warmPixels(page, "z");
+  assert.equal(await page.getByTestId("show-uncertainty").isChecked(), false, "off by default");
+  await page.getByTestId("view-z").focus();
+  await page.keyboard.press("u");
+  assert.equal(await page.getByTestId("show-uncertainty").isChecked(), true, "U turns it on");
+  await page.waitForFunction(() => window.__interslice.tracer().summary().uncertain > 0);
+  await idle();
+  await painted(page);
+  const after = await warmPixels(page, "z");
+  assert.ok(after > before + 50, `tinted pixels on z=${skipped}: ${before} -> ${after}`);
+  // No method picked: the preview used the recommended one and the note says which and why.
+  const s = await summary();
+  assert.equal(await page.getByTestId("method-select").inputValue(), "");
+  assert.ok(s.recommended === "image-guided" || s.recommended === "shape-auto", String(s.recommended));
+  assert.equal(s.method, s.recommended);
+  const note = await page.getByTestId("method-note").textContent();
+  const why =
+    s.recommended === "image-guided" ? "the image predicts your drawn slices better" : "the image did not help";
+  assert.equal(note, `${s.recommended}: ${why}`);
+  // The shape default picked: no reason is needed, and its band (wider than the image's) for the screenshot.
+  await page.getByTestId("method-select").selectOption("shape-auto");
+  await page.waitForFunction(() => window.__interslice.tracer().summary().method === "shape-auto");
+  await idle();
+  await painted(page);
+  assert.equal(await page.getByTestId("method-note").textContent(), "");
+  assert.ok((await warmPixels(page, "z")) > after, "the shape is less sure than the image");
+  await shot(page, "uncertainty");
+  await page.getByTestId("method-select").selectOption("");
+  await page.waitForFunction(() => window.__interslice.tracer().summary().recommended !== null);
+  await idle();
+  // Off again: the tint goes, the preview stays.
+  await page.getByTestId("show-uncertainty").uncheck();
+  await painted(page);
+  assert.ok((await warmPixels(page, "z")) <= before + 5);
 });
 
 test("trace one x slice through the nucleus on the x view", async () => {

@@ -607,12 +607,23 @@ export interface components {
             /** @description Axis. */
             axis: string;
             /**
+             * Format: float
+             * @description With `recommend`: the image weight leave-one-out chose (0: the image
+             *     did not help).
+             */
+            image_weight?: number | null;
+            /**
              * Format: int32
              * @description Label id.
              */
             label: number;
             /** @description Method used. */
             method: string;
+            /**
+             * @description With `recommend`: `image-guided` when its leave-one-out on the drawn
+             *     slices uses the cell's image, else the shape default.
+             */
+            recommended_method?: string | null;
             /**
              * Format: int64
              * @description Id of the stored result (for the mesh).
@@ -638,6 +649,11 @@ export interface components {
             /** @description Axis of the drawn slices. */
             axis: string;
             /**
+             * @description Also outline, on each skipped slice, where the result is unsure
+             *     (`PreviewSlice.uncertain`).
+             */
+            confidence?: boolean;
+            /**
              * Format: int32
              * @description Label id.
              */
@@ -650,6 +666,12 @@ export interface components {
              *     as a result.
              */
             preview?: boolean;
+            /**
+             * @description Also say which method leave-one-out recommends for this label and
+             *     axis (`recommended_method`, `image_weight`); with no `method`, the
+             *     result is the recommended method's.
+             */
+            recommend?: boolean;
         };
         /** @description Body of `POST /api/login`. */
         LoginBody: {
@@ -706,6 +728,12 @@ export interface components {
             drawn: boolean;
             /** @description Slice index. */
             index: number;
+            /**
+             * @description With `confidence`, on a slice not drawn: the outlines (same
+             *     coordinates as `contours`) of the pixels whose confidence is below
+             *     0.75 (`UNCERTAIN_BELOW`), empty where the result is sure everywhere.
+             */
+            uncertain?: number[][][] | null;
         };
         /** @description Body of `POST /api/cells/{cell}/ratings`. */
         RatingBody: {

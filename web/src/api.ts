@@ -115,8 +115,23 @@ export interface Drawn {
 /** An interpolation method (schema `MethodInfo`). */
 export type Method = Schemas["MethodInfo"];
 
-/** One slice of a preview (schema `PreviewSlice`, contours as `[u, v]` pairs). */
-export type PreviewSlice = Omit<Schemas["PreviewSlice"], "contours"> & { contours: Vec2[][] };
+/** One slice of a preview (schema `PreviewSlice`, contours and uncertain outlines as `[u, v]` pairs). */
+export type PreviewSlice = Omit<Schemas["PreviewSlice"], "contours" | "uncertain"> & {
+  contours: Vec2[][];
+  uncertain?: Vec2[][] | null;
+};
+
+/** What an interpolation is asked for besides the mask. */
+export interface InterpOptions {
+  /** The method ("" or absent: the server's default, or the recommended one with `recommend`). */
+  method?: string;
+  /** Keep it in the server's memory only (a live preview). */
+  preview?: boolean;
+  /** Outline the uncertain pixels of the skipped slices. */
+  confidence?: boolean;
+  /** Ask which method leave-one-out recommends (and use it when no method is named). */
+  recommend?: boolean;
+}
 
 /** The answer of an interpolation (schema `InterpolateAnswer`, with `axis` an `Axis`). */
 export type InterpResult = Omit<Schemas["InterpolateAnswer"], "axis" | "slices"> & {
@@ -316,8 +331,15 @@ export class Api {
    * negative result id) instead of being stored as a result: the live
    * previews after each pen lift; the Interpolate button stores its result.
    */
-  interpolate(id: string, label: number, axis: Axis, method?: string, preview = false): Promise<InterpResult> {
-    const body: Schemas["InterpolateBody"] = { label, axis, preview, ...(method ? { method } : {}) };
+  interpolate(id: string, label: number, axis: Axis, o: InterpOptions = {}): Promise<InterpResult> {
+    const body: Schemas["InterpolateBody"] = {
+      label,
+      axis,
+      preview: o.preview ?? false,
+      confidence: o.confidence ?? false,
+      recommend: o.recommend ?? false,
+      ...(o.method ? { method: o.method } : {}),
+    };
     return this.json("POST", `/api/cells/${enc(id)}/interpolate`, body);
   }
   /** GET the slices of a label to trace next, best first. */

@@ -25,7 +25,11 @@ export interface TracerElements {
   swatch: HTMLSpanElement;
   newLabel: HTMLInputElement;
   method: HTMLSelectElement;
+  /** Which method the preview used and why (with "recommended" chosen). */
+  methodNote: HTMLDivElement;
   autoPreview: HTMLInputElement;
+  /** "Show uncertainty": tint the preview's least certain pixels. */
+  uncertainty: HTMLInputElement;
   /** "n changes not saved yet" / "all changes saved". */
   unsaved: HTMLSpanElement;
   status: HTMLDivElement;
@@ -66,6 +70,8 @@ export interface LayoutActions {
   setLabel(id: number): void;
   addLabel(): void;
   setMethod(name: string): void;
+  /** The "Show uncertainty" box changed. */
+  setUncertainty(on: boolean): void;
   setBrightness(v: number): void;
   setContrast(v: number): void;
   choosePreset(id: string): void;
@@ -90,6 +96,8 @@ export interface LayoutStart {
   evalPanel: HTMLElement;
   /** The "done when" threshold (a fraction of Dice). */
   doneWhen: number;
+  /** Whether "Show uncertainty" starts on. */
+  uncertainty: boolean;
 }
 
 /** Build the screen. */
@@ -190,7 +198,16 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
     swatch: h("span", { class: "swatch" }),
     newLabel,
     method,
+    methodNote: h("div", { class: "muted small", testid: "method-note" }),
     autoPreview: h("input", { type: "checkbox", checked: true, id: "auto-preview" }),
+    uncertainty: h("input", {
+      type: "checkbox",
+      checked: s.uncertainty,
+      id: "show-uncertainty",
+      testid: "show-uncertainty",
+      title: "Tint the pixels of the preview that are least certain (U)",
+      onchange: () => act.setUncertainty(e.uncertainty.checked),
+    }),
     unsaved: h("span", { class: "unsaved" }),
     status: h("div", { class: "statusline", testid: "status-line" }),
     volume: h("div", { class: "muted small" }),
@@ -293,7 +310,9 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
       {},
       h("h3", {}, "Interpolation"),
       row(e.method),
+      e.methodNote,
       row(e.autoPreview, h("label", { for: "auto-preview" }, "live preview on skipped slices")),
+      row(e.uncertainty, h("label", { for: "show-uncertainty" }, "Show uncertainty")),
       row(btn("interpolate", "Interpolate", "Interpolate now (I)", () => act.run("interpolate"), "primary")),
       e.volume,
       e.summary,
@@ -390,10 +409,20 @@ export function fillLabels(sel: HTMLSelectElement, labels: readonly Label[]): vo
   labels.forEach((l, n) => sel.append(h("option", { value: String(l.id) }, `${n < 9 ? n + 1 + " · " : ""}${l.name}`)));
 }
 
-/** Fill the method menu (the server lists the default first). */
+/**
+ * Fill the method menu: first "recommended" (value ""), the method the
+ * server's leave-one-out picks per label and axis, then every method (the
+ * server lists its default first).
+ */
 export function fillMethods(sel: HTMLSelectElement, methods: readonly Method[]): void {
   clear(sel);
-  if (methods.length === 0) sel.append(h("option", { value: "" }, "default"));
+  sel.append(
+    h(
+      "option",
+      { value: "", title: "image-guided where the image predicts the drawn slices better, else the shape default" },
+      "recommended",
+    ),
+  );
   methods.forEach((m, n) =>
     sel.append(h("option", { value: m.name, title: m.description }, n === 0 ? `${m.name} (default)` : m.name)),
   );

@@ -7,11 +7,27 @@
 import type { Api, InterpResult } from "./api";
 import type { Axis } from "./transform";
 
-/** What is interpolated: the label being traced, its axis, the chosen method ("" = default). */
+/** What is interpolated: the label being traced, its axis, the chosen method ("" = recommended). */
 export interface PreviewTarget {
   label: number;
   axis: Axis;
   method: string;
+  /** Ask for the uncertain outlines of the skipped slices ("Show uncertainty"). */
+  confidence: boolean;
+}
+
+/**
+ * The words beside the method menu: which method the preview used and why.
+ * With no method picked (`picked` empty) the server ran the one leave-one-out
+ * recommends and said so; with one picked there is nothing to explain.
+ */
+export function methodNote(r: InterpResult | undefined, picked: string): string {
+  if (picked || !r?.recommended_method) return "";
+  const rec = r.recommended_method;
+  const drawn = r.slices.filter((s) => s.drawn).length;
+  if (r.image_weight && r.image_weight > 0) return `${rec}: the image predicts your drawn slices better`;
+  if (drawn < 3) return `${rec}: a third drawn slice lets the image be tested`;
+  return `${rec}: the image did not help`;
 }
 
 /** What the screen does around a preview run. */
@@ -62,7 +78,7 @@ export class Previews {
   async ensure(label: number, axis: Axis, method: string): Promise<InterpResult> {
     let res = this.get(label, axis);
     if (!res) {
-      res = await this.api.interpolate(this.cellId, label, axis, method || undefined, true);
+      res = await this.api.interpolate(this.cellId, label, axis, { method, preview: true, recommend: !method });
       this.results.set(`${label}/${axis}`, res);
     }
     return res;
@@ -91,7 +107,7 @@ export class Previews {
       return;
     }
     this.busy = true;
-    const { label, axis, method } = this.hooks.target();
+    const { label, axis, method, confidence } = this.hooks.target();
     const t0 = this.changedAt;
     try {
       const contoursDrawn = await this.hooks.prepare(explicit);
@@ -100,7 +116,13 @@ export class Previews {
         this.hooks.show(label, null, explicit);
       } else {
         // Only the Interpolate button stores a result; live previews stay in the server's memory.
-        const r = await this.api.interpolate(this.cellId, label, axis, method || undefined, !explicit);
+        // With no method picked the server runs the one leave-one-out recommends.
+        const r = await this.api.interpolate(this.cellId, label, axis, {
+          method,
+          preview: !explicit,
+          confidence,
+          recommend: !method,
+        });
         this.results.set(`${label}/${axis}`, r);
         this.hooks.show(label, r, explicit);
         if (t0 !== null) {

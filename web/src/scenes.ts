@@ -1,12 +1,13 @@
 /**
  * What the slice views paint besides the image: on the working view the
  * contours of its slice (the label being traced in bold yellow, the others in
- * their colour) and the dashed preview on skipped slices; on the other two
+ * their colour), the dashed preview on skipped slices and, when asked, the
+ * tint of its uncertain pixels; on the other two
  * views the strips where the working axis' contours cut their plane.
  */
 import type { Contour, InterpResult } from "./api";
 import { scanlineIntervals } from "./geometry";
-import type { PaintContour, PaintRect } from "./sliceview";
+import type { PaintContour, PaintRect, PaintTint } from "./sliceview";
 import { axisDim, inPlane, type Axis, type Vec2 } from "./transform";
 import { AXES } from "./viewstate";
 
@@ -56,6 +57,28 @@ export function workingContours(t: Traced, idx: number, drawnHere: boolean): Pai
       cs.push({ points: p, color: t.colorOf(label), width: label === t.label ? 2 : 1.2, dashed: true });
   }
   return cs;
+}
+
+/** The translucent warm tint of the uncertain pixels, under the preview contour. */
+export const UNCERTAIN_TINT = "rgba(255, 140, 0, 0.4)";
+
+/**
+ * The uncertain outlines of working slice `idx` ("Show uncertainty"): one
+ * tint per preview that has them there (skipped slices only: the server
+ * sends none for drawn ones, and none is shown for the traced label on a
+ * slice it has just drawn, `drawnHere`), filled even-odd so a band's inner
+ * outline stays a hole.
+ */
+export function uncertainTints(t: Traced, idx: number, drawnHere: boolean): PaintTint[] {
+  const tints: PaintTint[] = [];
+  for (const [label, res] of t.previews) {
+    if (res.axis !== t.axis) continue;
+    const s = res.slices.find((x) => x.index === idx);
+    if (!s || s.drawn || !s.uncertain || s.uncertain.length === 0) continue;
+    if (label === t.label && drawnHere) continue;
+    tints.push({ polys: s.uncertain, color: UNCERTAIN_TINT });
+  }
+  return tints;
 }
 
 /**

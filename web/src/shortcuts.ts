@@ -27,6 +27,7 @@ export type Action =
   | "next-cell"
   | "toggle-3d"
   | "toggle-overlay"
+  | "toggle-uncertainty"
   | "help"
   | `label-${number}`;
 
@@ -61,6 +62,7 @@ export const SHORTCUTS: Shortcut[] = [
   { keys: "W", help: "Automatic window/level from the histogram", action: "auto-window" },
   { keys: "D", help: "Show or hide the 3D view", action: "toggle-3d" },
   { keys: "O", help: "Show or hide the FP/FN overlay", action: "toggle-overlay" },
+  { keys: "U", help: "Show or hide the uncertainty tint of the preview", action: "toggle-uncertainty" },
   { keys: "N", help: "Next cell", action: "next-cell" },
   { keys: "?", help: "This help", action: "help" },
 ];
@@ -144,6 +146,9 @@ export function actionOf(e: KeyLike): Action | null {
     case "o":
     case "O":
       return "toggle-overlay";
+    case "u":
+    case "U":
+      return "toggle-uncertainty";
     case "n":
     case "N":
       return "next-cell";

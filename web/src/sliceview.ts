@@ -48,6 +48,14 @@ export interface PaintContour {
   fill?: number;
 }
 
+/** Polygons filled together (even-odd: an outline inside another is a hole), no stroke. */
+export interface PaintTint {
+  /** Closed polylines in slice coordinates. */
+  polys: Vec2[][];
+  /** CSS colour (with its alpha). */
+  color: string;
+}
+
 /** An axis-aligned filled rectangle in slice coordinates (cuts of other-axis contours). */
 export interface PaintRect {
   /** u0, v0, u1, v1 */
@@ -60,6 +68,8 @@ export interface PaintRect {
 export interface Scene {
   /** Crosshair positions (slice u and v of the other two views' slice centres). */
   cross: { u: number; v: number; colorU: string; colorV: string } | null;
+  /** Tints painted under the contours (the uncertain pixels of the preview). */
+  tints: PaintTint[];
   /** Contours to paint. */
   contours: PaintContour[];
   /** Rectangles to paint. */
@@ -113,6 +123,7 @@ export class SliceView {
   /** The scene painted over the image. */
   scene: Scene = {
     cross: null,
+    tints: [],
     contours: [],
     rects: [],
     stroke: null,
@@ -248,6 +259,7 @@ export class SliceView {
       ctx.fillStyle = r.color;
       ctx.fillRect(a, b, c - a, d - b);
     }
+    for (const tint of sc.tints) this.paintTint(ctx, tint);
     for (const c of sc.contours) this.paintPolygon(ctx, c);
     if (sc.cross) {
       const [cx, cy] = sliceToCanvas(t, sc.cross.u, sc.cross.v);
@@ -307,6 +319,21 @@ export class SliceView {
     ctx.putImageData(img, 0, 0);
     this.overlayCanvas = c;
     this.overlaySrc = o;
+  }
+
+  private paintTint(ctx: CanvasRenderingContext2D, tint: PaintTint): void {
+    if (!this.t) return;
+    ctx.beginPath();
+    for (const poly of tint.polys) {
+      poly.forEach(([u, v], i) => {
+        const [x, y] = sliceToCanvas(this.t!, u, v);
+        if (i === 0) ctx.moveTo(x, y);
+        else ctx.lineTo(x, y);
+      });
+      ctx.closePath();
+    }
+    ctx.fillStyle = tint.color;
+    ctx.fill("evenodd");
   }
 
   private paintPolygon(ctx: CanvasRenderingContext2D, c: PaintContour): void {

@@ -16,12 +16,12 @@ import { DisplayWindow } from "./display";
 import { EvalPanel } from "./evalpanel";
 import { buildLayout, fillLabels, fillMethods, fillPresets, type TracerElements } from "./layout";
 import { Panel3D } from "./panel3d";
-import { Previews } from "./preview";
+import { Previews, methodNote } from "./preview";
 import { SummaryPanel } from "./summary";
 import { Pen } from "./pen";
 import { newClientId, type Op, type Outbox } from "./queue";
 import { ChangesPending, Tracings, type Target } from "./reconcile";
-import { cutRects, workingContours, type Traced } from "./scenes";
+import { cutRects, uncertainTints, workingContours, type Traced } from "./scenes";
 import { actionOf, type Action } from "./shortcuts";
 import { statusLine } from "./statusline";
 import { Advisor, loadDoneWhen, renderAdvice, saveDoneWhen } from "./advice";
@@ -98,7 +98,12 @@ export class Tracer {
     this.time = new TimeTracker(api, cell.id, () => this.updateStatus());
     this.previews = new Previews(api, cell.id, {
       live: () => this.el.autoPreview.checked,
-      target: () => ({ label: this.st.label, axis: this.st.axis, method: this.st.method }),
+      target: () => ({
+        label: this.st.label,
+        axis: this.st.axis,
+        method: this.st.method,
+        confidence: this.st.uncertainty,
+      }),
       prepare: async (explicit) => {
         if (explicit) await host.outbox.flush();
         await this.tracings.reloadDrawn(this.target);
@@ -116,7 +121,7 @@ export class Tracer {
       settled: () => this.updateStatus(),
     });
     this.advisor = new Advisor(api, cell.id, {
-      target: () => ({ label: this.st.label, axis: this.st.axis, method: this.st.method }),
+      target: () => ({ label: this.st.label, axis: this.st.axis, method: this.methodInUse }),
       show: (state) => renderAdvice(this.el, state, this.doneWhen),
     });
     this.pen = new Pen({
@@ -175,6 +180,7 @@ export class Tracer {
         ]),
         evalPanel: this.evalPanel.root,
         doneWhen: this.doneWhen,
+        uncertainty: this.st.uncertainty,
       },
       {
         run: (action) => this.doAction(action),
@@ -190,8 +196,10 @@ export class Tracer {
         setMethod: (name) => {
           this.st.method = name;
           this.saveState();
+          this.showMethodNote();
           this.previews.schedule();
         },
+        setUncertainty: (on) => this.setUncertainty(on),
         setBrightness: (v) => {
           this.st.brightness = v;
           this.applyWindow();
@@ -222,6 +230,14 @@ export class Tracer {
 
   private saveState(): void {
     saveViewState(localStorage, this.cell.id, this.st);
+  }
+
+  /**
+   * The method the label is interpolated with: the one picked, else the one
+   * the last preview's leave-one-out recommended ("" before any: the default).
+   */
+  private get methodInUse(): string {
+    return this.st.method || (this.previews.get(this.st.label, this.st.axis)?.recommended_method ?? "");
   }
 
   private get index(): number {
@@ -290,7 +306,7 @@ export class Tracer {
 
   private fillMethods(): void {
     fillMethods(this.el.method, this.methods);
-    if (!this.methods.some((m) => m.name === this.st.method)) this.st.method = this.methods[0]?.name ?? "";
+    if (!this.methods.some((m) => m.name === this.st.method)) this.st.method = "";
     this.el.method.value = this.st.method;
   }
 
@@ -357,15 +373,18 @@ export class Tracer {
   private overlay(a: Axis, idx: number, working: boolean): Overlay {
     const t: Traced = {
       contours: this.tracings.contours,
-      previews: this.previews.all(),
+      // An array: the working view reads it twice (contours, tints).
+      previews: [...this.previews.all()],
       axis: this.st.axis,
       label: this.st.label,
       colorOf: (l) => this.labelOf(l).color,
     };
     const evaluation = this.evalPanel.overlayFor(a, idx);
-    if (!working) return { contours: [], rects: cutRects(t, a, this.st.focus), stroke: null, evaluation };
-    const contours = workingContours(t, idx, this.tracings.drawn.has(idx));
-    return { contours, rects: [], stroke: this.pen.stroke, evaluation };
+    if (!working) return { tints: [], contours: [], rects: cutRects(t, a, this.st.focus), stroke: null, evaluation };
+    const drawnHere = this.tracings.drawn.has(idx);
+    const contours = workingContours(t, idx, drawnHere);
+    const tints = this.st.uncertainty ? uncertainTints(t, idx, drawnHere) : [];
+    return { tints, contours, rects: [], stroke: this.pen.stroke, evaluation };
   }
 
   // ---------- navigation ----------
@@ -406,6 +425,7 @@ export class Tracer {
     void this.tracings.reloadDrawn(this.target).then(() => {
       this.paintAll();
       this.updateStatus();
+      this.showMethodNote();
       const { label, axis } = this.target;
       if (this.tracings.drawn.size > 0 && !this.previews.get(label, axis)) void this.runPreview(false);
       this.advisor.refresh();
@@ -599,11 +619,28 @@ export class Tracer {
   private showPreview(label: number, r: InterpResult | null, explicit: boolean): void {
     if (!r) {
       this.el.volume.textContent = "";
+      this.showMethodNote();
       if (explicit) this.host.toast("draw at least one contour first");
       return;
     }
     this.el.volume.textContent = `${this.labelOf(label).name}: ${fmtNum(r.volume)} ${r.unit} (${r.method})`;
+    this.showMethodNote();
     this.paintAll();
+  }
+
+  /** Which method the preview of the current label used and why (with "recommended" chosen). */
+  private showMethodNote(): void {
+    const r = this.previews.get(this.st.label, this.st.axis);
+    this.el.methodNote.textContent = methodNote(r, this.st.method);
+  }
+
+  /** Turn the uncertainty tint on or off; on, the preview is asked again with its confidence. */
+  setUncertainty(on: boolean): void {
+    this.st.uncertainty = on;
+    this.el.uncertainty.checked = on;
+    this.saveState();
+    this.paintAll();
+    if (on && this.tracings.drawn.size > 0) void this.runPreview(false);
   }
 
   /** Show or hide the 3D view. */
@@ -723,6 +760,8 @@ export class Tracer {
         return;
       case "toggle-overlay":
         return this.evalPanel.toggleOverlay();
+      case "toggle-uncertainty":
+        return this.setUncertainty(!this.st.uncertainty);
       case "help":
         this.el.help.hidden = !this.el.help.hidden;
         return;
@@ -767,7 +806,11 @@ export class Tracer {
     overlay: boolean;
     pending: number;
     suggested: number | null;
+    method: string | null;
+    recommended: string | null;
+    uncertain: number;
   } {
+    const res = this.previews.get(this.st.label, this.st.axis);
     return {
       axis: this.st.axis,
       index: this.index,
@@ -777,6 +820,9 @@ export class Tracer {
       overlay: this.views.views[this.st.axis].scene.overlay !== null,
       pending: this.host.outbox.pending.length,
       suggested: this.advisor.next(this.st.label, this.st.axis),
+      method: res?.method ?? null,
+      recommended: res?.recommended_method ?? null,
+      uncertain: res?.slices.find((s) => s.index === this.index)?.uncertain?.length ?? 0,
     };
   }
 }

@@ -7,7 +7,7 @@
 import type { CellDetail, RawSlice } from "./api";
 import { AXIS_COLOR, crosshair } from "./scenes";
 import { SliceCache } from "./slicecache";
-import { SliceView, type PaintContour, type PaintRect, type ViewHandlers } from "./sliceview";
+import { SliceView, type PaintContour, type PaintRect, type PaintTint, type ViewHandlers } from "./sliceview";
 import type { Sample } from "./stroke";
 import { axisDim, inPlane, sliceShape, type Axis, type Vec2 } from "./transform";
 import { AXES } from "./viewstate";
@@ -15,6 +15,8 @@ import type { Window } from "./windowing";
 
 /** What a view paints over its slice. */
 export interface Overlay {
+  /** Tints under the contours (the preview's uncertain pixels, working view only). */
+  tints: PaintTint[];
   contours: PaintContour[];
   rects: PaintRect[];
   /** The red contour being drawn (working view only). */
@@ -143,6 +145,7 @@ export class LinkedViews {
     v.scene.caption = `${a.toUpperCase()} = ${idx}${working ? "  · working view" : ""}`;
     v.scene.captionColor = AXIS_COLOR[a];
     v.scene.overlay = o.evaluation;
+    v.scene.tints = o.tints;
     v.scene.contours = o.contours;
     v.scene.rects = o.rects;
     v.scene.stroke = o.stroke;

@@ -1,6 +1,7 @@
 /**
  * The per-cell view settings of the tracing screen (axis, focus, skip step,
- * label, method, display window), kept in `localStorage` so a reload returns
+ * label, method ("" = the recommended one), display window, uncertainty
+ * tint), kept in `localStorage` so a reload returns
  * to the same place. Anything stored that no longer fits the cell (a label
  * that is gone, a focus outside the volume) falls back to the default.
  */
@@ -24,6 +25,8 @@ export interface ViewState {
   preset: string;
   /** The window typed in by hand (with preset "manual"). */
   manual: Window | null;
+  /** "Show uncertainty": tint the preview's least certain pixels (off by default, docs/web-ui.md says why). */
+  uncertainty: boolean;
 }
 
 /** Where the settings are kept (localStorage in the browser). */
@@ -54,6 +57,7 @@ export function loadViewState(
     contrast: 0,
     preset: "",
     manual: null,
+    uncertainty: false,
   };
   try {
     const s = JSON.parse(store.getItem(key(cellId)) ?? "null") as Partial<ViewState> | null;
@@ -70,6 +74,8 @@ export function loadViewState(
       const mw = m.manual;
       if (!(mw && Number.isFinite(mw.lo) && Number.isFinite(mw.hi) && mw.hi > mw.lo)) m.manual = null;
       if (typeof m.preset !== "string" || (m.preset === "manual" && !m.manual)) m.preset = "";
+      if (typeof m.method !== "string") m.method = "";
+      m.uncertainty = m.uncertainty === true;
       return m;
     }
   } catch {

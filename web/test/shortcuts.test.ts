@@ -23,6 +23,7 @@ describe("shortcuts", () => {
     expect(actionOf(key("z"))).toBe("axis-z");
     expect(actionOf(key("3"))).toBe("label-3");
     expect(actionOf(key("Enter"))).toBe("add-contour");
+    expect(actionOf(key("u"))).toBe("toggle-uncertainty");
     expect(actionOf(key("q"))).toBeNull();
     expect(actionOf(key("s", { ctrlKey: true }))).toBeNull();
   });
@@ -51,6 +52,7 @@ describe("shortcuts", () => {
       "w",
       "d",
       "o",
+      "u",
       "n",
       "?",
     ];

@@ -14,6 +14,7 @@
 use crate::error::ProjectError;
 use interslice_core::contour_file::ContourFile;
 use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, Volume};
+use interslice_interp::confidence::shape_confidence;
 use interslice_interp::{InterpError, Interpolator, SparseMask, multi_axis};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
@@ -185,16 +186,53 @@ pub fn interpolate_label(
     method: &dyn Interpolator,
     cancel: &Cancel,
 ) -> Result<(Mask, Vec<usize>), ProjectError> {
-    let counts: Vec<(Axis, usize)> = tracing
+    let counts = label_counts(tracing, label)?;
+    let (mask, drawn, _) = interpolate_axes(
+        tracing, geometry, label, axis, &counts, method, false, cancel,
+    )?;
+    Ok((mask, drawn))
+}
+
+/// [`interpolate_label`] with the confidence per voxel of its result, in
+/// `[0.5, 1]`: the method's own
+/// ([`Interpolator::interpolate_with_confidence`], what `interslice
+/// interpolate --confidence` writes for each label) when only `axis` has
+/// drawn slices; when other axes shape the result too, the shape confidence
+/// of the combined mask along `axis` ([`shape_confidence`], the trait's
+/// default), which does not know that a slice drawn across `axis` makes the
+/// voxels beside it sure, so it errs on the side of doubt there.
+pub fn interpolate_label_with_confidence(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+    method: &dyn Interpolator,
+    cancel: &Cancel,
+) -> Result<(Mask, Vec<usize>, Volume<f32>), ProjectError> {
+    let counts = label_counts(tracing, label)?;
+    let (mask, drawn, conf) = interpolate_axes(
+        tracing, geometry, label, axis, &counts, method, true, cancel,
+    )?;
+    Ok((mask, drawn, conf.expect("confidence requested")))
+}
+
+/// The drawn-slice count of `label` per axis.
+fn label_counts(tracing: &dyn Tracing, label: u16) -> Result<Vec<(Axis, usize)>, ProjectError> {
+    Ok(tracing
         .drawn_labels()?
         .into_iter()
         .filter(|d| d.0 == label)
         .map(|d| (d.1, d.2))
-        .collect();
-    interpolate_axes(tracing, geometry, label, axis, &counts, method, cancel)
+        .collect())
 }
 
-/// [`interpolate_label`] with the label's drawn-slice counts per axis known.
+/// A label's mask, its drawn slices along the axis asked and, when asked,
+/// its confidence.
+type Interpolated = (Mask, Vec<usize>, Option<Volume<f32>>);
+
+/// [`interpolate_label`] with the label's drawn-slice counts per axis known;
+/// the confidence too when `confidence` is set.
+#[allow(clippy::too_many_arguments)]
 fn interpolate_axes(
     tracing: &dyn Tracing,
     geometry: &Geometry,
@@ -202,8 +240,9 @@ fn interpolate_axes(
     axis: Axis,
     counts: &[(Axis, usize)],
     method: &dyn Interpolator,
+    confidence: bool,
     cancel: &Cancel,
-) -> Result<(Mask, Vec<usize>), ProjectError> {
+) -> Result<Interpolated, ProjectError> {
     cancel.check()?;
     let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
     if drawn.len() < 2 {
@@ -225,15 +264,23 @@ fn interpolate_axes(
         .iter()
         .map(|(a, m, d)| SparseMask::new(m, *a, d).with_cancel(cancel))
         .collect();
-    let out = multi_axis::combine(method, &inputs).map_err(|e| match e {
-        InterpError::Input(m) if inputs.len() > 1 => {
-            ProjectError::invalid(format!("label {label}: {m}"))
-        }
-        e => e.into(),
-    })?;
+    let (out, conf) = if confidence && inputs.len() == 1 {
+        let (m, c) = method.interpolate_with_confidence(inputs[0])?;
+        (m, Some(c))
+    } else {
+        let out = multi_axis::combine(method, &inputs).map_err(|e| match e {
+            InterpError::Input(m) if inputs.len() > 1 => {
+                ProjectError::invalid(format!("label {label}: {m}"))
+            }
+            e => e.into(),
+        })?;
+        cancel.check()?;
+        let conf = confidence.then(|| shape_confidence(&out, &inputs[0], 1.0));
+        (out, conf)
+    };
     cancel.check()?;
     let (_, _, drawn) = sparse.swap_remove(0);
-    Ok((out, drawn))
+    Ok((out, drawn, conf))
 }
 
 /// The full label volume of a tracing: each label drawn is interpolated
@@ -272,7 +319,9 @@ pub fn label_volume(
             .copied()
             .max_by_key(|&(a, n)| (n, a))
             .expect("a label has an axis");
-        let (mask, _) = interpolate_axes(tracing, geometry, label, axis, &counts, method, cancel)?;
+        let (mask, ..) = interpolate_axes(
+            tracing, geometry, label, axis, &counts, method, false, cancel,
+        )?;
         for (o, &m) in out.data_mut().iter_mut().zip(mask.data()) {
             if m {
                 *o = label;

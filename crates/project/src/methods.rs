@@ -1,11 +1,15 @@
 //! Interpolation methods by name: the slice-wise ones of `interslice_interp`
 //! and the mesh ones, as the server's `/api/methods` lists them and every
 //! `method` parameter or `--method` option names them; on a cell, also the
-//! image-guided method, which reads the cell's own intensities.
+//! image-guided method, which reads the cell's own intensities, and which of
+//! the two a tracing should use ([`recommend`]).
 use crate::cells::LoadedCell;
 use crate::error::ProjectError;
+use crate::groundtruth::{Tracing, sparse_mask};
+use interslice_core::{Axis, Cancel, Geometry, Volume};
 use interslice_interp::image::ImageGuided;
-use interslice_interp::{IMAGE_METHOD, Interpolator};
+use interslice_interp::{DEFAULT_METHOD, IMAGE_METHOD, Interpolator, SparseMask};
+use std::sync::Arc;
 
 /// The interpolator called `name` (slice-wise or mesh), or the default.
 pub fn method_by_name(name: Option<&str>) -> Result<Box<dyn Interpolator>, ProjectError> {
@@ -38,3 +42,56 @@ pub fn method_list() -> Vec<(String, String)> {
 
 /// The image-guided method's line in [`method_list`].
 const IMAGE_DESCRIPTION: &str = "shape prior fused with the cell's intensities, learnt from the drawn slices (leave-one-out falls back to the shape where the image does not help)";
+
+/// Which method a tracing of one label along one axis is best interpolated
+/// with on its cell, as leave-one-out on the drawn slices decides it.
+pub struct Recommendation {
+    /// [`IMAGE_METHOD`] when the image-guided method's leave-one-out uses
+    /// the image, else the shape default ([`interslice_interp::DEFAULT_METHOD`]),
+    /// which is then the image-guided result bit for bit and cheaper.
+    pub method: &'static str,
+    /// The weight of the image that leave-one-out chose (0: shape only).
+    pub image_weight: f32,
+    /// The method itself, ready to interpolate the tracing (the
+    /// image-guided one keeps its plan, so leave-one-out runs once).
+    pub interpolator: Box<dyn Interpolator>,
+}
+
+/// The [`Recommendation`] for `label` along `axis` of `tracing` on the cell
+/// whose intensities are `image`: the image-guided method's plan
+/// ([`ImageGuided::plan`]), which interpolates the held-out drawn slices only,
+/// not the volume. With fewer than three drawn slices nothing can be held
+/// out and the shape default is recommended.
+pub fn recommend(
+    tracing: &dyn Tracing,
+    geometry: &Geometry,
+    label: u16,
+    axis: Axis,
+    image: Arc<Volume<f32>>,
+    cancel: &Cancel,
+) -> Result<Recommendation, ProjectError> {
+    cancel.check()?;
+    let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
+    let shape = || -> Result<Recommendation, ProjectError> {
+        Ok(Recommendation {
+            method: DEFAULT_METHOD,
+            image_weight: 0.0,
+            interpolator: method_by_name(None)?,
+        })
+    };
+    if drawn.len() < 3 {
+        return shape();
+    }
+    let input = SparseMask::new(&mask, axis, &drawn).with_cancel(cancel);
+    let guided = ImageGuided::new(image);
+    let plan = guided.plan(&input)?;
+    cancel.check()?;
+    if !plan.uses_image() {
+        return shape();
+    }
+    Ok(Recommendation {
+        method: IMAGE_METHOD,
+        image_weight: plan.params.w,
+        interpolator: Box::new(guided.with_plan(&input, plan)),
+    })
+}

@@ -77,6 +77,9 @@ type Case<'a> = (Vec<bool>, Vec<f32>, &'a [f32], f64);
 #[derive(Debug, Clone)]
 pub struct ImageGuided {
     image: Arc<Volume<f32>>,
+    /// A plan already made ([`ImageGuided::with_plan`]) for the input along
+    /// this axis with these drawn slices, used instead of planning again.
+    planned: Option<(Axis, Vec<usize>, Plan)>,
 }
 
 /// What leave-one-out decided for one label.
@@ -98,6 +101,13 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Whether the fusion reads the image (leave-one-out chose a weight
+    /// `w > 0` and the drawn slices gave an intensity model); when not, the
+    /// method's result is its shape prior, bit for bit.
+    pub fn uses_image(&self) -> bool {
+        self.params.w > 0.0 && self.model.is_some()
+    }
+
     /// The prior's scale `τ` at `delta` slices from the nearest drawn slice:
     /// the held-out boundary error scaled linearly with the distance.
     pub fn tau(&self, delta: f64) -> f32 {
@@ -110,7 +120,19 @@ impl ImageGuided {
     /// The method on `image`; it must lie on the grid of the masks it is given
     /// (checked by [`Interpolator::interpolate`]).
     pub fn new(image: Arc<Volume<f32>>) -> ImageGuided {
-        ImageGuided { image }
+        ImageGuided {
+            image,
+            planned: None,
+        }
+    }
+
+    /// The method with `plan` made by [`ImageGuided::plan`] for `input`: an
+    /// interpolation of an input along the same axis with the same drawn
+    /// slices uses it instead of running leave-one-out again (a caller that
+    /// asked for the plan first, to say whether the image helps, pays once).
+    pub fn with_plan(mut self, input: &SparseMask<'_>, plan: Plan) -> ImageGuided {
+        self.planned = Some((input.axis, input.drawn.to_vec(), plan));
+        self
     }
 
     fn check_grid(&self, input: &SparseMask<'_>) -> Result<(), InterpError> {
@@ -267,10 +289,15 @@ impl ImageGuided {
         input: &SparseMask<'_>,
         confidence: bool,
     ) -> Result<(Mask, Option<Volume<f32>>), InterpError> {
-        let plan = self.plan(input)?;
+        let plan = match &self.planned {
+            Some((axis, drawn, plan)) if *axis == input.axis && drawn == input.drawn => {
+                plan.clone()
+            }
+            _ => self.plan(input)?,
+        };
         input.check_cancelled()?;
         let prior = candidates()[plan.prior].interpolate(*input)?;
-        let Some(model) = plan.model.as_ref().filter(|_| plan.params.w > 0.0) else {
+        let Some(model) = plan.model.as_ref().filter(|_| plan.uses_image()) else {
             let c = confidence.then(|| shape_confidence(&prior, input, plan.scale));
             return Ok((prior, c));
         };

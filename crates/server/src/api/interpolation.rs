@@ -1,5 +1,6 @@
 //! `POST /api/cells/{cell}/interpolate` (the preview of one label) and the stored results with their meshes.
 use super::*;
+use interslice_project::methods;
 
 /// Body of `POST /api/cells/{cell}/interpolate`.
 #[derive(Deserialize, utoipa::ToSchema)]
@@ -16,7 +17,27 @@ pub struct InterpolateBody {
     /// as a result.
     #[serde(default)]
     pub preview: bool,
+    /// Also outline, on each skipped slice, where the result is unsure
+    /// (`PreviewSlice.uncertain`).
+    #[serde(default)]
+    pub confidence: bool,
+    /// Also say which method leave-one-out recommends for this label and
+    /// axis (`recommended_method`, `image_weight`); with no `method`, the
+    /// result is the recommended method's.
+    #[serde(default)]
+    pub recommend: bool,
 }
+
+/// Voxels whose confidence ([`interslice_interp::confidence`]) is below this
+/// are outlined as uncertain. Confidence is the (for the image-guided
+/// method, calibrated on held-out drawn slices) probability that a voxel is
+/// on the side of the boundary the result put it on; below 0.75 it is wrong
+/// at least one time in four, which is where a second look pays. For the
+/// shape methods, `σ(|φ| / τ) < 0.75` is the band `|φ| < ln 3 · τ ≈ 1.1 τ`
+/// around the preview contour, `τ` the shape's expected boundary error at
+/// that distance from the drawn slices: a band that widens towards the
+/// middle of a gap and closes at the drawn slices.
+pub const UNCERTAIN_BELOW: f32 = 0.75;
 
 /// One slice of the preview.
 #[derive(Serialize, utoipa::ToSchema)]
@@ -27,6 +48,11 @@ pub struct PreviewSlice {
     pub drawn: bool,
     /// Contours of the interpolated mask on it.
     pub contours: Vec<Vec<[f64; 2]>>,
+    /// With `confidence`, on a slice not drawn: the outlines (same
+    /// coordinates as `contours`) of the pixels whose confidence is below
+    /// 0.75 (`UNCERTAIN_BELOW`), empty where the result is sure everywhere.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertain: Option<Vec<Vec<[f64; 2]>>>,
 }
 
 /// Answer of `POST /api/cells/{cell}/interpolate`.
@@ -48,6 +74,14 @@ pub struct InterpolateAnswer {
     pub unit: String,
     /// Foreground voxels.
     pub voxels: u64,
+    /// With `recommend`: `image-guided` when its leave-one-out on the drawn
+    /// slices uses the cell's image, else the shape default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recommended_method: Option<String>,
+    /// With `recommend`: the image weight leave-one-out chose (0: the image
+    /// did not help).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub image_weight: Option<f32>,
 }
 
 #[utoipa::path(
@@ -71,7 +105,11 @@ pub(super) async fn interpolate(
     let axis = parse_axis(&body.axis)?;
     check_label(&state, body.label)?;
     let c = state.cell(&cell).await?;
-    let method = method_for_cell(body.method.as_deref(), &c)?;
+    // A named method is checked here so a bad name is a 400 before any work.
+    let named = match body.method.as_deref() {
+        Some(name) => Some(method_for_cell(Some(name), &c)?),
+        None => None,
+    };
     let st = state.clone();
     let answer = job(&state, move |cancel| {
         let g = c.volume.geometry().clone();
@@ -80,28 +118,48 @@ pub(super) async fn interpolate(
             cell: &cell,
             user_id: me.id,
         };
-        let (mask, drawn) = groundtruth::interpolate_label(
-            &tracing,
-            &g,
-            body.label,
-            axis,
-            method.as_ref(),
-            cancel,
-        )?;
+        let rec = if body.recommend {
+            Some(methods::recommend(
+                &tracing,
+                &g,
+                body.label,
+                axis,
+                c.intensity(),
+                cancel,
+            )?)
+        } else {
+            None
+        };
+        let answer_rec = rec.as_ref().map(|r| (r.method, r.image_weight));
+        // The recommended method comes planned: leave-one-out runs once.
+        let method = match (named, rec) {
+            (Some(m), _) => m,
+            (None, Some(r)) => r.interpolator,
+            (None, None) => method_for_cell(None, &c)?,
+        };
+        let (mask, drawn, confidence) = if body.confidence {
+            let (m, d, conf) = groundtruth::interpolate_label_with_confidence(
+                &tracing,
+                &g,
+                body.label,
+                axis,
+                method.as_ref(),
+                cancel,
+            )?;
+            (m, d, Some(conf))
+        } else {
+            let (m, d) = groundtruth::interpolate_label(
+                &tracing,
+                &g,
+                body.label,
+                axis,
+                method.as_ref(),
+                cancel,
+            )?;
+            (m, d, None)
+        };
         let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
-        let (w, h) = mask.slice_shape(axis);
-        use rayon::prelude::*;
-        let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
-            .into_par_iter()
-            .map(|i| {
-                let s = mask.slice(axis, i).expect("index in range");
-                PreviewSlice {
-                    index: i,
-                    drawn: drawn.binary_search(&i).is_ok(),
-                    contours: interslice_core::trace::mask_polygons(&s, w, h),
-                }
-            })
-            .collect();
+        let slices = preview_slices(&mask, axis, &drawn, confidence.as_ref(), cancel)?;
         // A preview lives in memory; an asked-for result is stored.
         let result_id = if body.preview {
             st.previews
@@ -119,10 +177,59 @@ pub(super) async fn interpolate(
             volume: voxels as f64 * g.voxel_volume(),
             unit: format!("{}³", g.unit.symbol()),
             voxels,
+            recommended_method: answer_rec.map(|r| r.0.to_string()),
+            image_weight: answer_rec.map(|r| r.1),
         })
     })
     .await?;
     Ok(Json(answer))
+}
+
+/// Every slice of `mask` along `axis`: its contours and, with `confidence`,
+/// the outlines of its uncertain pixels on the slices not `drawn`. Slices
+/// run in parallel; a cancelled request stops within one slice's tracing.
+fn preview_slices(
+    mask: &interslice_core::Mask,
+    axis: Axis,
+    drawn: &[usize],
+    confidence: Option<&interslice_core::Volume<f32>>,
+    cancel: &Cancel,
+) -> Result<Vec<PreviewSlice>, ApiError> {
+    use interslice_core::trace::mask_polygons;
+    use rayon::prelude::*;
+    let (w, h) = mask.slice_shape(axis);
+    let slices: Vec<PreviewSlice> = (0..mask.slice_count(axis))
+        .into_par_iter()
+        .map(|i| {
+            let is_drawn = drawn.binary_search(&i).is_ok();
+            if cancel.is_cancelled() {
+                return PreviewSlice {
+                    index: i,
+                    drawn: is_drawn,
+                    contours: Vec::new(),
+                    uncertain: None,
+                };
+            }
+            let s = mask.slice(axis, i).expect("index in range");
+            let uncertain = confidence.filter(|_| !is_drawn).map(|c| {
+                let low: Vec<bool> = c
+                    .slice(axis, i)
+                    .expect("index in range")
+                    .iter()
+                    .map(|&x| x < UNCERTAIN_BELOW)
+                    .collect();
+                mask_polygons(&low, w, h)
+            });
+            PreviewSlice {
+                index: i,
+                drawn: is_drawn,
+                contours: mask_polygons(&s, w, h),
+                uncertain,
+            }
+        })
+        .collect();
+    cancel.check()?;
+    Ok(slices)
 }
 
 #[derive(Deserialize)]
