@@ -90,8 +90,8 @@ export interface LayoutStart {
   brightness: number;
   contrast: number;
   done: boolean;
-  /** Download links of the exports: format → URL. */
-  exports: [string, string][];
+  /** Download links of the exports: format → its URL now (read when clicked: it follows the method menu). */
+  exports: [string, () => string][];
   /** The evaluation panel's section. */
   evalPanel: HTMLElement;
   /** The "done when" threshold (a fraction of Dice). */
@@ -362,7 +362,20 @@ export function buildLayout(s: LayoutStart, act: LayoutActions): TracerElements 
         "div",
         { class: "row small" },
         "Export: ",
-        ...s.exports.map(([f, href]) => h("a", { href, download: "", class: "exp" }, f)),
+        ...s.exports.map(([f, url]) =>
+          h(
+            "a",
+            {
+              href: url(),
+              download: "",
+              class: "exp",
+              onclick: (ev: MouseEvent) => {
+                (ev.currentTarget as HTMLAnchorElement).href = url();
+              },
+            },
+            f,
+          ),
+        ),
       ),
     ),
   );

@@ -7,6 +7,19 @@
 import type { Api, InterpResult } from "./api";
 import type { Axis } from "./transform";
 
+/**
+ * The method exports use when none is picked ("recommended"). Per label, the
+ * image-guided method is what the recommendation picks: where its
+ * leave-one-out finds the image unhelpful it is the shape default, bit for
+ * bit. So an export with it gives every label the result its preview showed.
+ */
+export const RECOMMENDED_FOR_EXPORT = "image-guided";
+
+/** The method of an export: the one picked, else the recommended one per label. */
+export function exportMethod(picked: string): string {
+  return picked || RECOMMENDED_FOR_EXPORT;
+}
+
 /** What is interpolated: the label being traced, its axis, the chosen method ("" = recommended). */
 export interface PreviewTarget {
   label: number;

@@ -16,7 +16,7 @@ import { DisplayWindow } from "./display";
 import { EvalPanel } from "./evalpanel";
 import { buildLayout, fillLabels, fillMethods, fillPresets, type TracerElements } from "./layout";
 import { Panel3D } from "./panel3d";
-import { Previews, methodNote } from "./preview";
+import { Previews, exportMethod, methodNote } from "./preview";
 import { SummaryPanel } from "./summary";
 import { Pen } from "./pen";
 import { newClientId, type Op, type Outbox } from "./queue";
@@ -176,7 +176,7 @@ export class Tracer {
         done: this.cell.status === "done",
         exports: ["nii.gz", "nrrd", "seg.nrrd", "tiff", "contours"].map((f) => [
           f,
-          this.host.api.exportUrl(this.cell.id, f),
+          () => this.host.api.exportUrl(this.cell.id, f, exportMethod(this.st.method)),
         ]),
         evalPanel: this.evalPanel.root,
         doneWhen: this.doneWhen,

@@ -1,6 +1,6 @@
 import { describe, expect, it } from "vitest";
 import type { InterpResult, PreviewSlice } from "../src/api";
-import { methodNote } from "../src/preview";
+import { exportMethod, methodNote } from "../src/preview";
 import { UNCERTAIN_TINT, uncertainTints, type Traced } from "../src/scenes";
 import type { Vec2 } from "../src/transform";
 
@@ -80,5 +80,12 @@ describe("method note", () => {
     expect(methodNote(r, "linear")).toBe("");
     expect(methodNote(result(three), "")).toBe("");
     expect(methodNote(undefined, "")).toBe("");
+  });
+});
+
+describe("export method", () => {
+  it("is the picked method, else the image-guided one (per label what the recommendation picks)", () => {
+    expect(exportMethod("nearest")).toBe("nearest");
+    expect(exportMethod("")).toBe("image-guided");
   });
 });
