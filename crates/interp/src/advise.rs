@@ -25,11 +25,16 @@
 //!   outermost gaps (no held-out slice on one side) and a tracing of only
 //!   two slices.
 //!
-//! The gain also predicts the result's Dice: with `E` expected wrong voxels
-//! and a structure of `V` voxels (the drawn areas integrated along the axis,
-//! trapezoid rule), Dice ≈ `1 − E / (2V)`; the predicted gain of one more
-//! slice is `gain / (2V)`, which the "done when" hint compares with the
-//! user's threshold.
+//! **The level.** The model ranks the gaps; how wrong the result is overall
+//! is the leave-one-out estimate of [`crate::predict`] (the predicted Dice
+//! the tracing summary shows too, one definition for both), pooled over the
+//! labels. The model's own total, `E` expected wrong voxels over a structure
+//! of `V` voxels (the drawn areas integrated along the axis, trapezoid rule),
+//! `1 − E / (2V)`, is scaled to that level, and every gain with it: the
+//! predicted rise of Dice from one more slice is `gain / (2V)` times that
+//! scale, which the "done when" hint compares with the user's threshold.
+//! With two drawn slices there is nothing to hold out, and the model's own
+//! `1 − E / (2V)` is the predicted Dice.
 //!
 //! Several labels share the drawn slices: a gap's rate is the sum of the
 //! labels' rates, `V` the sum of their volumes. The N best slices are chosen
@@ -37,8 +42,9 @@
 //! next best slice is taken, so suggestions spread over the volume.
 use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
 use crate::loo::Compact;
+use crate::predict::{LeaveOneOut, predicted_dice};
 use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
-use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_core::{Axis, Cancel, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
@@ -238,21 +244,23 @@ pub fn advise(
         )));
     }
     let labels = drawn_labels(sparse, axis, &drawn);
-    let per_label: Vec<(Vec<f64>, f64)> = labels
+    let per_label: Vec<(Vec<f64>, f64, Option<LeaveOneOut>)> = labels
         .par_iter()
         .map(|&l| {
             let m = traced_mask(sparse, axis, &drawn, l);
-            label_rates(&m, axis, &drawn, method)
+            let (rates, volume) = label_rates(&m, axis, &drawn, method)?;
+            let level = predicted_dice(&m, axis, &drawn, whole.as_ref(), &Cancel::new())?;
+            Ok::<_, InterpError>((rates, volume, level))
         })
         .collect::<Result<_, _>>()?;
-    let volume: f64 = per_label.iter().map(|(_, v)| v).sum();
+    let volume: f64 = per_label.iter().map(|(_, v, _)| v).sum();
     let gaps: Vec<Gap> = drawn
         .windows(2)
         .enumerate()
         .map(|(g, w)| Gap {
             a: w[0],
             b: w[1],
-            rate: per_label.iter().map(|(r, _)| r[g]).sum(),
+            rate: per_label.iter().map(|(r, _, _)| r[g]).sum(),
         })
         .collect();
     let scale = if volume > 0.0 {
@@ -261,13 +269,33 @@ pub fn advise(
         0.0
     };
     let error: f64 = gaps.iter().map(|g| g.error_with(0)).sum();
-    let predicted_dice = (1.0 - error * scale).clamp(0.0, 1.0);
+    let model_loss = error * scale;
+    // The leave-one-out level, pooled over the labels (all or none have one:
+    // they share the drawn slices).
+    let levels: Vec<(f64, f64)> = per_label
+        .iter()
+        .filter_map(|(_, _, l)| l.map(|l| l.pooled))
+        .collect();
+    let (predicted_dice, level) = if levels.len() == per_label.len() && !levels.is_empty() {
+        let (wrong, areas) = levels
+            .iter()
+            .fold((0.0, 0.0), |(w, a), &(x, y)| (w + x, a + y));
+        let loss = if areas > 0.0 { wrong / areas } else { 0.0 };
+        let level = if model_loss > 0.0 {
+            loss / model_loss
+        } else {
+            1.0
+        };
+        ((1.0 - loss).clamp(0.0, 1.0), level)
+    } else {
+        ((1.0 - model_loss).clamp(0.0, 1.0), 1.0)
+    };
     let suggestions = allocate(&gaps, count)
         .into_iter()
         .map(|(slice, gain, g)| Suggestion {
             slice,
-            gain_voxels: gain,
-            dice_gain: gain * scale,
+            gain_voxels: gain * level,
+            dice_gain: gain * level * scale,
             between: [g.a, g.b],
         })
         .collect();
@@ -284,6 +312,51 @@ pub fn advise(
 mod tests {
     use super::*;
     use interslice_core::{Geometry, LengthUnit, Volume};
+
+    /// The advice reports the leave-one-out predicted Dice of
+    /// [`crate::predict`] (the one the tracing summary shows), and on slices
+    /// drawn unevenly, as a tracer following the advice draws them, it is
+    /// close to the true Dice.
+    #[test]
+    fn the_predicted_dice_is_the_leave_one_out_one_and_near_the_truth() {
+        use interslice_core::phantom::{PhantomParams, generate};
+        let p = generate(&PhantomParams {
+            size: 64,
+            seed: 1,
+            bits: 8,
+            noise: 0.0,
+        })
+        .unwrap();
+        // The nucleus with its nucleoli.
+        let nucleus: LabelVolume = p.labels.map(|v| u16::from(v >= 2));
+        let truth = nucleus.map(|v| v > 0);
+        let nonempty = crate::drawn::nonempty_slices(&nucleus, Axis::Z);
+        let (first, last) = (nonempty[0], *nonempty.last().unwrap());
+        let n = last - first;
+        let drawn = vec![first, first + n / 7, first + n / 2, first + 4 * n / 5, last];
+        let sparse = crate::protocol::sparse_of(&nucleus, Axis::Z, &drawn);
+        let a = advise(&sparse, Axis::Z, &drawn, 1, None, None).unwrap();
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let m = sparse.map(|v| v > 0);
+        let loo =
+            crate::predict::predicted_dice(&m, Axis::Z, &drawn, method.as_ref(), &Cancel::new())
+                .unwrap()
+                .unwrap();
+        assert_eq!(a.predicted_dice, loo.predicted_dice);
+        let out = method
+            .interpolate(SparseMask::new(&m, Axis::Z, &drawn))
+            .unwrap();
+        let true_dice = interslice_core::metrics::overlap_masks(&truth, &out)
+            .unwrap()
+            .dice()
+            .unwrap();
+        eprintln!("true {true_dice:.4}, predicted {:.4}", a.predicted_dice);
+        assert!(
+            (a.predicted_dice - true_dice).abs() <= 0.03,
+            "true {true_dice:.4}, predicted {:.4}",
+            a.predicted_dice
+        );
+    }
 
     /// Equal rates spread the slices evenly, like uniform spacing; a gap
     /// with a higher rate gets more of them; the error falls convexly.

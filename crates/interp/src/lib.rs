@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod method;
 pub mod multi_axis;
 pub mod nearest;
+pub mod predict;
 pub mod protocol;
 pub mod registry;
 pub mod sdf;
