@@ -193,8 +193,8 @@ pub fn interpolate_label(
     Ok((mask, drawn))
 }
 
-/// [`interpolate_label`] with the confidence per voxel of its result, in
-/// `[0.5, 1]`: the method's own
+/// [`interpolate_label`], with the confidence per voxel of its result when
+/// `with_confidence` (`None` otherwise), in `[0.5, 1]`: the method's own
 /// ([`Interpolator::interpolate_with_confidence`], what `interslice
 /// interpolate --confidence` writes for each label) when only `axis` has
 /// drawn slices; when other axes shape the result too, the shape confidence
@@ -207,13 +207,20 @@ pub fn interpolate_label_with_confidence(
     label: u16,
     axis: Axis,
     method: &dyn Interpolator,
+    with_confidence: bool,
     cancel: &Cancel,
-) -> Result<(Mask, Vec<usize>, Volume<f32>), ProjectError> {
+) -> Result<Interpolated, ProjectError> {
     let counts = label_counts(tracing, label)?;
-    let (mask, drawn, conf) = interpolate_axes(
-        tracing, geometry, label, axis, &counts, method, true, cancel,
-    )?;
-    Ok((mask, drawn, conf.expect("confidence requested")))
+    interpolate_axes(
+        tracing,
+        geometry,
+        label,
+        axis,
+        &counts,
+        method,
+        with_confidence,
+        cancel,
+    )
 }
 
 /// The drawn-slice count of `label` per axis.

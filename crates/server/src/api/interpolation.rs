@@ -137,27 +137,15 @@ pub(super) async fn interpolate(
             (None, Some(r)) => r.interpolator,
             (None, None) => method_for_cell(None, &c)?,
         };
-        let (mask, drawn, confidence) = if body.confidence {
-            let (m, d, conf) = groundtruth::interpolate_label_with_confidence(
-                &tracing,
-                &g,
-                body.label,
-                axis,
-                method.as_ref(),
-                cancel,
-            )?;
-            (m, d, Some(conf))
-        } else {
-            let (m, d) = groundtruth::interpolate_label(
-                &tracing,
-                &g,
-                body.label,
-                axis,
-                method.as_ref(),
-                cancel,
-            )?;
-            (m, d, None)
-        };
+        let (mask, drawn, confidence) = groundtruth::interpolate_label_with_confidence(
+            &tracing,
+            &g,
+            body.label,
+            axis,
+            method.as_ref(),
+            body.confidence,
+            cancel,
+        )?;
         let voxels = mask.data().iter().filter(|&&b| b).count() as u64;
         let slices = preview_slices(&mask, axis, &drawn, confidence.as_ref(), cancel)?;
         // A preview lives in memory; an asked-for result is stored.
