@@ -12,4 +12,4 @@ if ! "$venv/bin/python" -c "import $imports" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/python" -m pip install -q --disable-pip-version-check $packages
 fi
-bin="$(scripts/test-binary.sh)"
+bin="$(scripts/built-binary.sh)"

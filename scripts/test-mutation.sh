@@ -9,5 +9,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-INTERSLICE_BIN="$(scripts/test-binary.sh)" \
+INTERSLICE_BIN="$(scripts/built-binary.sh)" \
   cargo test -q --workspace --test mutation -- --ignored --nocapture

@@ -64,7 +64,7 @@ rm -rf "$target/wheels-python"
 "$venv/bin/maturin" build -q --strip --profile dev -m python/Cargo.toml -i "$py" -o "$target/wheels-python"
 "$py" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels-python/interslice-*.whl
 
-INTERSLICE_BIN="$(scripts/test-binary.sh)"
+INTERSLICE_BIN="$(scripts/built-binary.sh)"
 export INTERSLICE_BIN
 
 echo "== python/: pytest"

@@ -34,7 +34,7 @@ echo "-- vitest"
 (cd web && npx vitest run)
 
 echo "-- ${PROFILE:-debug} binary (embeds web/dist)"
-INTERSLICE_BIN="$(scripts/test-binary.sh)"
+INTERSLICE_BIN="$(scripts/built-binary.sh)"
 export INTERSLICE_BIN
 
 echo "-- API types: web/generated/api-schema.d.ts is what the binary's OpenAPI document gives"
