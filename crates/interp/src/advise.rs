@@ -42,9 +42,9 @@
 //! next best slice is taken, so suggestions spread over the volume.
 use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
 use crate::loo::Compact;
-use crate::predict::{LeaveOneOut, predicted_dice};
+use crate::predict::{LeaveOneOut, estimate, held_out_errors};
 use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
-use interslice_core::{Axis, Cancel, LabelVolume, Mask, Volume};
+use interslice_core::{Axis, LabelVolume, Mask, Volume};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::Arc;
@@ -154,13 +154,14 @@ fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, Gap)> {
     out
 }
 
-/// The per-gap rates and the volume of one label's tracing.
+/// The per-gap rates, the volume and the leave-one-out estimate
+/// ([`crate::predict::estimate`]) of one label's tracing.
 fn label_rates(
     mask: &Mask,
     axis: Axis,
     drawn: &[usize],
     method: &dyn Interpolator,
-) -> Result<(Vec<f64>, f64), InterpError> {
+) -> Result<(Vec<f64>, f64, Option<LeaveOneOut>), InterpError> {
     let slices: Vec<Vec<bool>> = drawn
         .iter()
         .map(|&d| mask.slice(axis, d).map_err(InterpError::from))
@@ -175,19 +176,16 @@ fn label_rates(
         .map(|(d, a)| (a[0] + a[1]) / 2.0 * (d[1] - d[0]) as f64)
         .sum::<f64>()
         .max(areas.iter().copied().fold(0.0, f64::max));
-    // Rates of the held-out slices (index into `drawn`).
+    // Rates of the held-out slices (index into `drawn`), and from the same
+    // predictions the level of the error (`crate::predict`).
     let mut held_rate = vec![None; drawn.len()];
+    let mut errors = Vec::new();
     if drawn.len() >= 3 {
         let compact = Compact::of(&SparseMask::new(mask, axis, drawn))?;
-        for h in compact.held_out(method)? {
-            let truth = &slices[h.pos];
-            let wrong = truth
-                .iter()
-                .zip(&h.predicted)
-                .filter(|(x, y)| x != y)
-                .count() as f64;
-            let span = compact.reach(h.pos) as f64 * 2.0;
-            held_rate[h.pos] = Some(4.0 * wrong / span.max(1.0));
+        for (pos, e) in held_out_errors(&compact, method)? {
+            let span = compact.reach(pos) as f64 * 2.0;
+            held_rate[pos] = Some(4.0 * e.wrong / span.max(1.0));
+            errors.push(e);
         }
     }
     let rates = (0..drawn.len() - 1)
@@ -210,7 +208,7 @@ fn label_rates(
             loo.max(change / (4.0 * l))
         })
         .collect();
-    Ok((rates, volume))
+    Ok((rates, volume, estimate(&errors)))
 }
 
 /// Rank the undrawn slices of `sparse` between its outermost drawn slices:
@@ -248,9 +246,7 @@ pub fn advise(
         .par_iter()
         .map(|&l| {
             let m = traced_mask(sparse, axis, &drawn, l);
-            let (rates, volume) = label_rates(&m, axis, &drawn, method)?;
-            let level = predicted_dice(&m, axis, &drawn, whole.as_ref(), &Cancel::new())?;
-            Ok::<_, InterpError>((rates, volume, level))
+            label_rates(&m, axis, &drawn, method)
         })
         .collect::<Result<_, _>>()?;
     let volume: f64 = per_label.iter().map(|(_, v, _)| v).sum();
@@ -338,10 +334,15 @@ mod tests {
         let a = advise(&sparse, Axis::Z, &drawn, 1, None, None).unwrap();
         let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
         let m = sparse.map(|v| v > 0);
-        let loo =
-            crate::predict::predicted_dice(&m, Axis::Z, &drawn, method.as_ref(), &Cancel::new())
-                .unwrap()
-                .unwrap();
+        let loo = crate::predict::predicted_dice(
+            &m,
+            Axis::Z,
+            &drawn,
+            method.as_ref(),
+            &interslice_core::Cancel::new(),
+        )
+        .unwrap()
+        .unwrap();
         assert_eq!(a.predicted_dice, loo.predicted_dice);
         let out = method
             .interpolate(SparseMask::new(&m, Axis::Z, &drawn))
