@@ -186,10 +186,8 @@ pub fn interpolate_label(
     method: &dyn Interpolator,
     cancel: &Cancel,
 ) -> Result<(Mask, Vec<usize>), ProjectError> {
-    let counts = label_counts(tracing, label)?;
-    let (mask, drawn, _) = interpolate_axes(
-        tracing, geometry, label, axis, &counts, method, false, cancel,
-    )?;
+    let (mask, drawn, _) =
+        interpolate_label_with_confidence(tracing, geometry, label, axis, method, false, cancel)?;
     Ok((mask, drawn))
 }
 
