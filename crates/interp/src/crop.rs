@@ -103,6 +103,11 @@ impl LabelBox {
         slices: &[DrawnSlice<'_>],
         reach: BoxReach,
     ) -> Option<LabelBox> {
+        let follows_drift = match reach {
+            BoxReach::Whole => return None,
+            BoxReach::Outline => false,
+            BoxReach::Drift => true,
+        };
         let (a, b) = axis.in_plane();
         let (w, h) = (dims[a], dims[b]);
         // In-plane extent of each drawn slice's outlines: [u_lo, u_hi, v_lo, v_hi].
@@ -118,10 +123,10 @@ impl LabelBox {
             ]
         });
         let ([u0, u1, v0, v1], first, last) = (ext?, first?, last?);
-        let margin = match reach {
-            BoxReach::Whole => return None,
-            BoxReach::Outline => MARGIN,
-            BoxReach::Drift => MARGIN + 3 * drift(&extents),
+        let margin = if follows_drift {
+            MARGIN + 3 * drift(&extents)
+        } else {
+            MARGIN
         };
         let along_lo = first
             .checked_sub(AXIS_SLICES)

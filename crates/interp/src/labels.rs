@@ -13,7 +13,7 @@
 //! ([`Interpolator::box_reach`]) runs on the label's box only
 //! ([`crate::crop`]).
 use crate::crop::{DrawnSlice, LabelBox};
-use crate::{BoxReach, InterpError, Interpolator, SparseMask};
+use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
 use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume};
@@ -74,7 +74,7 @@ fn run(
         .par_iter()
         .map(|&l| {
             let filled = traced_slices(sparse, axis, &drawn, l);
-            if method.box_reach() != BoxReach::Whole && !confidence {
+            if !confidence {
                 let slices: Vec<DrawnSlice<'_>> = drawn
                     .iter()
                     .zip(&filled)
