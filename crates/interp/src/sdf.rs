@@ -109,7 +109,6 @@ pub fn drawn_maps(
         .collect();
     input.check_cancelled()?;
     let depth = |m: &[f32]| -m.iter().copied().fold(0.0f32, f32::min);
-    let far = FAR;
     Ok((0..n)
         .into_par_iter()
         .map(|i| {
@@ -125,9 +124,9 @@ pub fn drawn_maps(
                 .filter_map(|j| sdfs[j].as_ref().filter(|_| !empty[j]))
                 .collect();
             if neighbours.is_empty() {
-                return Some(vec![far; plane.len()]);
+                return Some(vec![FAR; plane.len()]);
             }
-            let mut out = vec![far; plane.len()];
+            let mut out = vec![FAR; plane.len()];
             for m in neighbours {
                 let r = depth(m);
                 for (o, &x) in out.iter_mut().zip(m.iter()) {

@@ -26,6 +26,16 @@ pub fn pchip_slope(s0: f32, s1: f32, h0: f32, h1: f32) -> f32 {
     (w1 + w2) / (w1 / s0 + w2 / s1)
 }
 
+/// The side of zero PCHIP's cubic between `a` and `b` is on, when both are
+/// on the same side: its slopes ([`pchip_slope`]) have the secant's sign and
+/// at most three times its size, so the cubic is monotone between `a` and
+/// `b` (Fritsch & Carlson 1980) and the slopes need not be computed. `None`
+/// when `a` and `b` differ in sign.
+#[inline]
+pub fn agreed_inside(a: f32, b: f32) -> Option<bool> {
+    ((a < 0.0) == (b < 0.0)).then_some(a < 0.0)
+}
+
 /// Cubic Hermite value at fraction `t` of an interval of length `h` between
 /// values `y0`, `y1` with slopes `m0`, `m1`.
 #[inline]
@@ -77,9 +87,8 @@ impl Interpolator for ShapeCubic {
             let mut out = vec![false; plane.len()];
             for p in 0..plane.len() {
                 let (a, b) = (y0[p], y1[p]);
-                // PCHIP's cubic is monotone between `a` and `b`.
-                if (a < 0.0) == (b < 0.0) {
-                    out[p] = a < 0.0;
+                if let Some(inside) = agreed_inside(a, b) {
+                    out[p] = inside;
                     continue;
                 }
                 let sec = (b - a) / h;

@@ -45,7 +45,7 @@
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
 use crate::sdf::{FAR, drawn_maps, signed_distance};
-use crate::shape_cubic::pchip_slope;
+use crate::shape_cubic::{agreed_inside, pchip_slope};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
@@ -625,12 +625,9 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
             let (pu, pv) = (u as f64, v as f64);
             let ya = ca.sample(pu + sa[0], pv + sa[1]);
             let yb = cb.sample(pu + sb[0], pv + sb[1]);
-            // The slopes are PCHIP's (same sign as the secant, at most three
-            // times it), so the cubic is monotone between `ya` and `yb`
-            // (Fritsch & Carlson 1980): where both sides agree, so does it,
-            // and the neighbouring slices need not be read.
-            if (ya < 0.0) == (yb < 0.0) {
-                if ya < 0.0 {
+            // Where both sides agree, the neighbouring slices need not be read.
+            if let Some(inside) = agreed_inside(ya, yb) {
+                if inside {
                     out[u + plane.width * v] = true;
                 }
                 continue;
