@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 #[test]
-fn on_stardist_nuclei_the_image_guided_method_never_loses_to_the_shape() {
+fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
     let Some(dir) = std::env::var_os("INTERSLICE_INTERP_DATA").map(PathBuf::from) else {
         eprintln!("INTERSLICE_INTERP_DATA not set: run scripts/test-interp-data.sh");
         return;
@@ -21,19 +21,28 @@ fn on_stardist_nuclei_the_image_guided_method_never_loses_to_the_shape() {
     let image = interslice_io::read_volume(&sd.join("img3d.tif")).expect("stardist img3d.tif");
     let mask = labels.map(|l| l > 0);
     let guided = ImageGuided::new(Arc::new(intensity_f32(&image)));
-    // Measured (skipped-slice Dice, both methods): 0.9039 / 0.8118 / 0.7484
-    // at k = 1 / 3 / 5. Leave-one-out keeps the shape here: the nuclei that
-    // appear and vanish between drawn slices are missing from the prior, and
-    // the band fusion around it does not create them, so the image does not
-    // beat the shape on the held-out slices. The floors keep both honest.
-    for (k, floor) in [(1usize, 0.90), (3, 0.81), (5, 0.745)] {
+    // Measured (skipped-slice Dice, shape-auto / image-guided): 0.9039 /
+    // 0.9039, 0.8118 / 0.8231, 0.7484 / 0.7972, 0.7347 / 0.7941 at k = 1, 3,
+    // 5, 9. Across wide gaps the shape prior drifts off the small nuclei and
+    // the band fusion pulls it back onto their edges; at k = 1 leave-one-out
+    // keeps the shape (one slice from a drawn one it is nearly exact, and
+    // the image's gain on the held-out slices does not clear the bar). The
+    // floors keep both honest.
+    for (k, floor) in [(1usize, 0.90), (3, 0.81), (5, 0.745), (9, 0.73)] {
         let s = score(&ShapeAuto, &mask, Axis::Z, k)
             .unwrap()
             .unwrap()
             .skipped;
         let g = score(&guided, &mask, Axis::Z, k).unwrap().unwrap().skipped;
         println!("stardist k={k}: shape-auto {s:.4}, image-guided {g:.4}");
-        assert!(g >= s - 0.005, "k={k}: {g} vs {s}");
         assert!(s >= floor, "shape-auto k={k}: {s} < {floor}");
+        if k >= 5 {
+            assert!(
+                g > s + 0.03,
+                "k={k}: the image must beat the shape: {g} vs {s}"
+            );
+        } else {
+            assert!(g >= s - 0.005, "k={k}: {g} vs {s}");
+        }
     }
 }
