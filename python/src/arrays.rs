@@ -8,6 +8,7 @@
 //! the spacing in the same order), so `evaluate` uses those in place too.
 //! Anything else (a strided view) is copied once.
 use crate::error;
+use interslice_core::{Axis, Geometry, LabelVolume};
 use numpy::ndarray::{Array3, ShapeBuilder};
 use numpy::{
     Element, IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArray,
@@ -233,6 +234,108 @@ pub(crate) fn to_u16<T: LabelValue + Sync>(data: &[T], what: &str) -> PyResult<V
         )));
     }
     Ok(data.par_iter().map(|v| v.label().unwrap_or(0)).collect())
+}
+
+/// The voxels of an array in place, with the strides of its `x`, `y`, `z`
+/// indices: no copy when the array is contiguous in either order (a strided
+/// view is copied once, x-fastest).
+pub(crate) struct Strided<'a, T: Clone> {
+    pub data: Cow<'a, [T]>,
+    /// The shape `(nx, ny, nz)`.
+    pub dims: [usize; 3],
+    /// Elements between neighbours along x, y and z.
+    pub strides: [usize; 3],
+}
+
+/// `a`'s voxels with their strides (see [`Strided`]).
+pub(crate) fn strided<'a, T: Element + Copy>(a: &'a PyReadonlyArray3<'_, T>) -> Strided<'a, T> {
+    let s = a.shape();
+    let dims = [s[0], s[1], s[2]];
+    let order = memory_order(a);
+    if let (Some(order), Ok(slice)) = (order, a.as_slice()) {
+        let strides = match order {
+            Order::XFast => [1, dims[0], dims[0] * dims[1]],
+            Order::Reversed => [dims[1] * dims[2], dims[2], 1],
+        };
+        return Strided {
+            data: Cow::Borrowed(slice),
+            dims,
+            strides,
+        };
+    }
+    Strided {
+        data: voxels(a, Some(Order::XFast)).data,
+        dims,
+        strides: [1, dims[0], dims[0] * dims[1]],
+    }
+}
+
+impl<T: LabelValue + Clone> Strided<'_, T> {
+    /// Slice `index` along `axis` as labels, row-major in the pixel order of
+    /// [`interslice_core::Volume::slice`]; `None` if a value is not a label.
+    fn labels_of_slice(&self, axis: Axis, index: usize) -> Option<Vec<u16>> {
+        let (a, b) = axis.in_plane();
+        let base = self.strides[axis.dim()] * index;
+        let (su, sv) = (self.strides[a], self.strides[b]);
+        let (w, h) = (self.dims[a], self.dims[b]);
+        let mut out = vec![0u16; w * h];
+        let mut all = true;
+        for v in 0..h {
+            let row = &mut out[w * v..w * (v + 1)];
+            for (u, o) in row.iter_mut().enumerate() {
+                match self.data[base + u * su + v * sv].label() {
+                    Some(l) => *o = l,
+                    None => all = false,
+                }
+            }
+        }
+        all.then_some(out)
+    }
+}
+
+/// A label volume holding the slices `drawn` (along `axis`) of `a` on the
+/// grid `g`, as u16. The other slices stay empty and are never read:
+/// interpolation reads the drawn slices only, and a zeroed buffer that is
+/// never touched costs no memory traffic, where converting the whole array
+/// was most of a call's time on large volumes. Errs on the first value of a
+/// drawn slice that is not a label.
+pub(crate) fn drawn_slices_u16<T: LabelValue + Clone + Sync>(
+    a: &Strided<'_, T>,
+    g: Geometry,
+    axis: Axis,
+    drawn: &[usize],
+    what: &str,
+) -> PyResult<LabelVolume> {
+    use rayon::prelude::*;
+    let slices: Option<Vec<Vec<u16>>> = drawn
+        .par_iter()
+        .map(|&index| a.labels_of_slice(axis, index))
+        .collect();
+    let slices = slices.ok_or_else(|| {
+        error(format!(
+            "{what} must hold integer labels 0..=65535 (0 = background)"
+        ))
+    })?;
+    let mut vol = LabelVolume::zeros(g);
+    for (&index, s) in drawn.iter().zip(&slices) {
+        vol.set_slice(axis, index, s).map_err(error)?;
+    }
+    Ok(vol)
+}
+
+/// The slices along `axis` of `a` holding any non-zero value, ascending.
+pub(crate) fn nonzero_slices<T: LabelValue + Clone + Sync>(
+    a: &Strided<'_, T>,
+    axis: Axis,
+) -> Vec<usize> {
+    use rayon::prelude::*;
+    (0..a.dims[axis.dim()])
+        .into_par_iter()
+        .filter(|&index| {
+            a.labels_of_slice(axis, index)
+                .is_none_or(|s| s.iter().any(|&l| l != 0))
+        })
+        .collect()
 }
 
 /// A Fortran-ordered `[x, y, z]` numpy array owning `data` (x-fastest), no copy.

@@ -1,15 +1,16 @@
 //! `interpolate`, `advise` and `methods`.
-use crate::arrays::{AnyArray, FromLabel, any_array, intensities_f32, to_numpy, with_array};
-use crate::metrics::{labels_u16, spacing3};
+use crate::arrays::{
+    AnyArray, FromLabel, any_array, drawn_slices_u16, intensities_f32, nonzero_slices, strided,
+    to_numpy, with_array,
+};
+use crate::metrics::spacing3;
 use crate::volumes::geometry;
 use crate::{error, parse_axis};
-use interslice_core::{Axis, LabelVolume, LengthUnit, Volume};
-use interslice_interp::drawn::nonempty_slices;
-use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interpolate_labels};
+use interslice_core::{Axis, LabelVolume, LengthUnit, Volume, Voxel};
+use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interpolate_labels_as};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Interpolate the slices between the drawn slices of a label array, as
@@ -41,14 +42,25 @@ pub fn interpolate<'py>(
     let a = any_array(labels, "labels")?;
     let dims = a.shape();
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
-    let result = py
-        .detach(|| interpolate_labels(t.method.as_ref(), &t.sparse, t.axis, &t.drawn))
+    with_array!(&a, x => interpolated_like(py, x, &t, dims))
+}
+
+/// The interpolation of `t` painted straight into an array of the element
+/// type of `_like` (every label fits: they come from that array).
+fn interpolated_like<'py, T: Element + FromLabel + Voxel>(
+    py: Python<'py>,
+    _like: &PyReadonlyArray3<'_, T>,
+    t: &Tracing,
+    dims: [usize; 3],
+) -> PyResult<Bound<'py, PyAny>> {
+    let out = py
+        .detach(|| {
+            interpolate_labels_as(t.method.as_ref(), &t.sparse, t.axis, &t.drawn, |l| {
+                T::from_label(l).unwrap_or_default()
+            })
+        })
         .map_err(error)?;
-    let (_, out) = result.into_parts();
-    Ok(match a {
-        AnyArray::U16(_) => to_numpy(py, out, dims)?.into_any(),
-        ref other => with_array!(other, x => like(py, x, &out, dims)?),
-    })
+    Ok(to_numpy(py, out.into_parts().1, dims)?.into_any())
 }
 
 /// Which undrawn slices to trace next, as `interslice advise --json` prints
@@ -117,6 +129,7 @@ impl Tracing {
         let spacing = spacing3(spacing)?;
         let dims = a.shape();
         let g = geometry(dims, spacing, LengthUnit::Unknown)?;
+        let ig = g.clone();
         let image = match image {
             Some(img) => {
                 let i = any_array(img, "image")?;
@@ -127,30 +140,36 @@ impl Tracing {
                     )));
                 }
                 let data = intensities_f32(py, &i);
-                Some(Arc::new(Volume::from_vec(g.clone(), data).map_err(error)?))
+                Some(Arc::new(Volume::from_vec(ig, data).map_err(error)?))
             }
             None => None,
         };
         let method = by_name_with_image(method, image.clone()).map_err(error)?;
-        let data = labels_u16(py, a, "labels")?;
-        let sparse: LabelVolume = Volume::from_vec(g, data).map_err(error)?;
-        let count = sparse.slice_count(axis) as i64;
+        let count = dims[axis.dim()] as i64;
         let drawn = match drawn {
-            Some(d) => d
-                .into_iter()
-                .map(|i| {
-                    usize::try_from(i)
-                        .ok()
-                        .filter(|&u| (u as i64) < count)
-                        .ok_or_else(|| {
-                            error(format!(
-                                "drawn slice {axis}={i} is out of range (0..{count})"
-                            ))
-                        })
-                })
-                .collect::<PyResult<Vec<usize>>>()?,
-            None => py.detach(|| nonempty_slices(&sparse, axis)),
+            Some(d) => Some(
+                d.into_iter()
+                    .map(|i| {
+                        usize::try_from(i)
+                            .ok()
+                            .filter(|&u| (u as i64) < count)
+                            .ok_or_else(|| {
+                                error(format!(
+                                    "drawn slice {axis}={i} is out of range (0..{count})"
+                                ))
+                            })
+                    })
+                    .collect::<PyResult<Vec<usize>>>()?,
+            ),
+            None => None,
         };
+        let (sparse, drawn) = with_array!(a, x => {
+            let v = strided(x);
+            py.detach(|| {
+                let drawn = drawn.unwrap_or_else(|| nonzero_slices(&v, axis));
+                drawn_slices_u16(&v, g, axis, &drawn, "labels").map(|s| (s, drawn))
+            })?
+        });
         Ok(Tracing {
             sparse,
             axis,
@@ -159,21 +178,6 @@ impl Tracing {
             image,
         })
     }
-}
-
-/// `labels` as an array of the element type of `_like` (every label fits:
-/// they come from that array).
-fn like<'py, T: Element + FromLabel + Default + Send>(
-    py: Python<'py>,
-    _like: &PyReadonlyArray3<'_, T>,
-    labels: &[u16],
-    dims: [usize; 3],
-) -> PyResult<Bound<'py, PyAny>> {
-    let data: Vec<T> = labels
-        .par_iter()
-        .map(|&l| T::from_label(l).unwrap_or_default())
-        .collect();
-    Ok(to_numpy(py, data, dims)?.into_any())
 }
 
 /// The interpolation methods, the default first: a list of

@@ -90,3 +90,20 @@ def test_advise_equals_the_cli(cli, phantom_files):
     drawn = set(drawn_list(f["drawn"]))
     assert all(s["slice"] not in drawn for s in got["suggestions"])
     assert 0.5 < got["predicted_dice"] <= 1.0
+
+
+def test_only_the_drawn_slices_are_read(phantom_files):
+    sparse, meta = interslice.read(phantom_files["sparse"])
+    d = drawn_list(phantom_files["drawn"])
+    want = interslice.interpolate(sparse, drawn=d, spacing=meta["spacing"], method="shape-based")
+    # A value that is no label, on a slice that is not drawn, is never read
+    # (the slices between the drawn ones are the output's, not the input's).
+    skipped = next(z for z in range(d[0], d[-1]) if z not in d)
+    noisy = sparse.astype(np.float32)
+    noisy[:, :, skipped] = 0.5
+    got = interslice.interpolate(noisy, drawn=d, spacing=meta["spacing"], method="shape-based")
+    np.testing.assert_array_equal(got, want.astype(np.float32))
+    # On a drawn slice it is an error.
+    noisy[3, 3, d[1]] = 0.5
+    with pytest.raises(interslice.Error, match="integer labels"):
+        interslice.interpolate(noisy, drawn=d, spacing=meta["spacing"], method="shape-based")

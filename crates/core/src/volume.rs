@@ -10,7 +10,7 @@ pub trait Voxel: Copy + Default + Send + Sync + PartialEq + std::fmt::Debug + 's
 macro_rules! voxel {
     ($($t:ty),*) => {$(impl Voxel for $t { #[inline] fn to_f64(self) -> f64 { self as f64 } })*};
 }
-voxel!(u8, u16, i16, u32, i32, f32, f64);
+voxel!(u8, i8, u16, i16, u32, i32, u64, i64, f32, f64);
 impl Voxel for bool {
     #[inline]
     fn to_f64(self) -> f64 {

@@ -16,7 +16,7 @@ use crate::crop::{DrawnSlice, LabelBox};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
-use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume};
+use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
 /// Interpolate every label of `sparse` from its drawn slices along `axis`.
@@ -30,7 +30,21 @@ pub fn interpolate_labels(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<LabelVolume, InterpError> {
-    Ok(run(method, sparse, axis, drawn, false)?.0)
+    Ok(run(method, sparse, axis, drawn, false, |l| l)?.0)
+}
+
+/// [`interpolate_labels`] painting `value(label)` into a volume of another
+/// voxel type, so a caller holding labels in a narrower or wider type (a
+/// numpy array of uint8, a mask) gets its result without converting the
+/// whole volume afterwards.
+pub fn interpolate_labels_as<T: Voxel>(
+    method: &dyn Interpolator,
+    sparse: &LabelVolume,
+    axis: Axis,
+    drawn: &[usize],
+    value: impl Fn(u16) -> T,
+) -> Result<Volume<T>, InterpError> {
+    Ok(run(method, sparse, axis, drawn, false, value)?.0)
 }
 
 /// [`interpolate_labels`] with the confidence per voxel: the least
@@ -42,7 +56,7 @@ pub fn interpolate_labels_with_confidence(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<(LabelVolume, Volume<f32>), InterpError> {
-    let (labels, conf) = run(method, sparse, axis, drawn, true)?;
+    let (labels, conf) = run(method, sparse, axis, drawn, true, |l| l)?;
     Ok((labels, conf.expect("confidence requested")))
 }
 
@@ -55,13 +69,14 @@ enum Piece {
 /// A label's result and, when asked, its confidence.
 type LabelResult = Result<(Piece, Option<Volume<f32>>), InterpError>;
 
-fn run(
+fn run<T: Voxel>(
     method: &dyn Interpolator,
     sparse: &LabelVolume,
     axis: Axis,
     drawn: &[usize],
     confidence: bool,
-) -> Result<(LabelVolume, Option<Volume<f32>>), InterpError> {
+    value: impl Fn(u16) -> T,
+) -> Result<(Volume<T>, Option<Volume<f32>>), InterpError> {
     let drawn = sorted_drawn(sparse, axis, drawn)?;
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
@@ -97,20 +112,21 @@ fn run(
             }
         })
         .collect();
-    let mut out: LabelVolume = Volume::zeros(sparse.geometry().clone());
+    let mut out: Volume<T> = Volume::zeros(sparse.geometry().clone());
     let mut conf: Option<Volume<f32>> =
         confidence.then(|| Volume::filled(sparse.geometry().clone(), 1.0f32));
-    for (l, r) in labels.iter().zip(results) {
+    for (&l, r) in labels.iter().zip(results) {
         let (piece, c) = r?;
+        let v = value(l);
         match piece {
-            Piece::Boxed(b, m) => b.paint(&mut out, &m, *l),
+            Piece::Boxed(b, m) => b.paint(&mut out, &m, v),
             Piece::Whole(m) => out
                 .data_mut()
                 .par_iter_mut()
                 .zip(m.data().par_iter())
                 .for_each(|(o, &inside)| {
                     if inside {
-                        *o = *l;
+                        *o = v;
                     }
                 }),
         }

@@ -27,6 +27,6 @@ pub mod shape_based;
 pub mod shape_cubic;
 pub mod slices;
 
-pub use labels::{interpolate_labels, interpolate_labels_with_confidence};
+pub use labels::{interpolate_labels, interpolate_labels_as, interpolate_labels_with_confidence};
 pub use method::{BoxReach, InterpError, Interpolator, SparseMask};
 pub use registry::{DEFAULT_METHOD, IMAGE_METHOD, by_name, by_name_with_image, methods};
