@@ -235,3 +235,49 @@ fn study_rejects_bad_arguments() {
     assert!(run(&[gt, "--out", out, "--methods", "nope"]).contains("unknown method"));
     assert!(run(&[gt, "--out", out, "--label", "99"]).contains("label 99"));
 }
+
+/// The oracle tries every slice: with one slice to trace it is at least as
+/// good as the uniform tracer's middle slice on the whole volume, and its
+/// picks are nested (budget 2 keeps budget 1's slice).
+#[test]
+fn the_oracle_strategy_is_the_ceiling_of_one_slice() {
+    let (dir, gt) = phantom_ground_truth();
+    let out = dir.path().join("oracle");
+    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
+        .arg("study")
+        .arg(&gt)
+        .arg("--out")
+        .arg(&out)
+        .args([
+            "--strategy",
+            "uniform,oracle",
+            "--budget",
+            "1,2",
+            "--label",
+            "2",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let csv = std::fs::read_to_string(out.join("strategy.csv")).unwrap();
+    let row = |strategy: &str, budget: &str| -> (f64, Vec<usize>) {
+        let l = csv
+            .lines()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|c| c[0] == strategy && c[1] == budget)
+            .unwrap_or_else(|| panic!("no {strategy} {budget} in {csv}"));
+        (
+            l[4].parse().unwrap(),
+            l[5].split(' ').map(|s| s.parse().unwrap()).collect(),
+        )
+    };
+    let (uniform, _) = row("uniform", "1");
+    let (oracle1, picks1) = row("oracle", "1");
+    let (_, picks2) = row("oracle", "2");
+    assert!(oracle1 >= uniform, "{oracle1} < {uniform}: {csv}");
+    assert!(picks1.iter().all(|s| picks2.contains(s)), "{csv}");
+    let md = std::fs::read_to_string(out.join("strategy.md")).unwrap();
+    assert!(md.contains("uniform against oracle"), "{md}");
+    assert!(md.contains("| oracle (volume) |"), "{md}");
+}

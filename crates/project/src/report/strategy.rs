@@ -7,6 +7,11 @@
 //! mean over the labels; and the minutes the simulated tracer spent
 //! (traced slices × seconds per contour / 60).
 //!
+//! `oracle` is the ceiling any advice could reach: a tracer who knows the
+//! ground truth and, one slice at a time, traces the slice that raises the
+//! whole-volume Dice most (a greedy search: every untraced slice of the
+//! structure is tried at every step, so it is slow, and only a yardstick).
+//!
 //! The advised tracer knows its budget, as a tracer who set out to trace N
 //! more slices does: before each slice it asks for the advice on the slices
 //! it still has (`count` = what is left), traces the first, and asks again
@@ -29,6 +34,8 @@ pub enum Strategy {
     Uniform,
     /// The advice's best slice, asked again after each traced slice.
     Advised,
+    /// The slice that raises the whole-volume Dice most, knowing the truth.
+    Oracle,
 }
 
 impl Strategy {
@@ -37,6 +44,7 @@ impl Strategy {
         match self {
             Strategy::Uniform => "uniform",
             Strategy::Advised => "advised",
+            Strategy::Oracle => "oracle",
         }
     }
 
@@ -45,8 +53,9 @@ impl Strategy {
         match name.trim() {
             "uniform" => Ok(Strategy::Uniform),
             "advised" => Ok(Strategy::Advised),
+            "oracle" => Ok(Strategy::Oracle),
             other => Err(ProjectError::invalid(format!(
-                "unknown strategy '{other}' (uniform or advised)"
+                "unknown strategy '{other}' (uniform, advised or oracle)"
             ))),
         }
     }
@@ -154,6 +163,36 @@ impl Simulation<'_> {
         Ok(traced)
     }
 
+    /// The oracle's slices for every budget up to `max`: the outermost two,
+    /// then one at a time the untraced slice that raises the whole-volume
+    /// Dice most (ties: the lower slice). Entry `b` holds `b` picks.
+    fn oracle(&self, s: &Structure, max: usize) -> Result<Vec<Vec<usize>>, ProjectError> {
+        let mut traced = vec![s.first, s.last];
+        traced.dedup();
+        let mut out = vec![traced.clone()];
+        for _ in 0..max {
+            let mut best: Option<(f64, usize)> = None;
+            for c in s.first..=s.last {
+                if traced.contains(&c) {
+                    continue;
+                }
+                let mut t = traced.clone();
+                t.push(c);
+                t.sort_unstable();
+                let d = self.score(s, &t)?.1;
+                if best.is_none_or(|(bd, _)| d > bd) {
+                    best = Some((d, c));
+                }
+            }
+            if let Some((_, c)) = best {
+                traced.push(c);
+                traced.sort_unstable();
+            }
+            out.push(traced.clone());
+        }
+        Ok(out)
+    }
+
     /// Interpolate the structure's `traced` slices and score it.
     fn score(&self, s: &Structure, traced: &[usize]) -> Result<(f64, f64), ProjectError> {
         let method = by_name_with_image(self.method, self.image.clone())?;
@@ -176,12 +215,19 @@ impl Simulation<'_> {
         budgets: &[usize],
     ) -> Result<Vec<StrategyRow>, ProjectError> {
         let mut rows = Vec::new();
+        let max = budgets.iter().copied().max().unwrap_or(0);
         for s in self.labels.iter().filter_map(|&l| self.structure(l)) {
+            let oracle = if strategies.contains(&Strategy::Oracle) {
+                self.oracle(&s, max)?
+            } else {
+                Vec::new()
+            };
             for &strategy in strategies {
                 for &budget in budgets {
                     let traced = match strategy {
                         Strategy::Uniform => uniform_slices(s.first, s.last, budget),
                         Strategy::Advised => self.advised(&s, budget)?,
+                        Strategy::Oracle => oracle[budget].clone(),
                     };
                     let (dice_skipped, dice_volume) = self.score(&s, &traced)?;
                     rows.push(StrategyRow {
@@ -238,46 +284,62 @@ pub fn write(
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     let cell = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{x:.4}"));
+    let mut present: Vec<Strategy> = Vec::new();
+    for r in rows {
+        if !present.contains(&r.strategy) {
+            present.push(r.strategy);
+        }
+    }
+    let names: Vec<&str> = present.iter().map(|s| s.name()).collect();
+    let head =
+        |what: &str| -> String { names.iter().map(|n| format!(" {n} ({what}) |")).collect() };
+    let rule = "---:|".repeat(present.len());
     let mut md = format!(
-        "# Which slices to trace: uniform against advised\n\n\
+        "# Which slices to trace: {}\n\n\
          Each structure is traced on its own: its outermost slices and `budget` more. \
          Dice of the interpolation on the structure's skipped slices and on the whole \
          volume, the mean over the labels; minutes at {seconds_per_contour} s per traced \
          slice.\n\n\
-         | budget | traced | minutes | uniform (skipped) | advised (skipped) | uniform (volume) | advised (volume) |\n\
-         |---:|---:|---:|---:|---:|---:|---:|\n",
+         | budget | traced | minutes |{}{}\n|---:|---:|---:|{rule}{rule}\n",
+        names.join(" against "),
+        head("skipped"),
+        head("volume"),
     );
-    let (u, a) = (Strategy::Uniform, Strategy::Advised);
     for &b in &budgets {
         let traced = rows
             .iter()
             .find(|r| r.budget == b)
             .map_or(0, |r| r.traced.len());
-        let _ = writeln!(
+        let _ = write!(
             md,
-            "| {b} | {traced} | {:.1} | {} | {} | {} | {} |",
-            super::effort::minutes(traced, seconds_per_contour),
-            cell(mean(u, b, None, |r| r.dice_skipped)),
-            cell(mean(a, b, None, |r| r.dice_skipped)),
-            cell(mean(u, b, None, |r| r.dice_volume)),
-            cell(mean(a, b, None, |r| r.dice_volume)),
+            "| {b} | {traced} | {:.1} |",
+            super::effort::minutes(traced, seconds_per_contour)
         );
+        for f in [
+            |r: &StrategyRow| r.dice_skipped,
+            |r: &StrategyRow| r.dice_volume,
+        ] {
+            for &s in &present {
+                let _ = write!(md, " {} |", cell(mean(s, b, None, f)));
+            }
+        }
+        md.push('\n');
     }
     let mut labels: Vec<u16> = rows.iter().map(|r| r.label).collect();
     labels.sort_unstable();
     labels.dedup();
-    md.push_str(
-        "\nPer label, Dice on the skipped slices:\n\n\
-         | budget | label | uniform | advised |\n|---:|---:|---:|---:|\n",
+    let _ = write!(
+        md,
+        "\nPer label, Dice on the skipped slices:\n\n| budget | label |{}\n|---:|---:|{rule}\n",
+        names.iter().map(|n| format!(" {n} |")).collect::<String>()
     );
     for &b in &budgets {
         for &l in &labels {
-            let _ = writeln!(
-                md,
-                "| {b} | {l} | {} | {} |",
-                cell(mean(u, b, Some(l), |r| r.dice_skipped)),
-                cell(mean(a, b, Some(l), |r| r.dice_skipped)),
-            );
+            let _ = write!(md, "| {b} | {l} |");
+            for &s in &present {
+                let _ = write!(md, " {} |", cell(mean(s, b, Some(l), |r| r.dice_skipped)));
+            }
+            md.push('\n');
         }
     }
     write_text(&out.join("strategy.md"), &md)
