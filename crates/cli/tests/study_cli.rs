@@ -24,16 +24,26 @@ fn phantom_ground_truth() -> (tempfile::TempDir, PathBuf) {
     phantom_ground_truth_of(48, 3, "gt.nii.gz")
 }
 
+/// `interslice study GT --out OUT ARGS…`.
+fn study(gt: &std::path::Path, out: &std::path::Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_interslice"))
+        .arg("study")
+        .arg(gt)
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn study_writes_csv_json_plots_and_summary() {
     let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("study");
-    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
-        .arg("study")
-        .arg(&gt)
-        .arg("--out")
-        .arg(&out)
-        .args([
+    let r = study(
+        &gt,
+        &out,
+        &[
             "--skips",
             "0..3",
             "--methods",
@@ -41,9 +51,8 @@ fn study_writes_csv_json_plots_and_summary() {
             "--label",
             "2",
             "--quiet",
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     for f in [
         "results.csv",
@@ -81,12 +90,10 @@ fn study_writes_csv_json_plots_and_summary() {
 fn strategy_study_compares_uniform_and_advised_slices() {
     let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("strategy");
-    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
-        .arg("study")
-        .arg(&gt)
-        .arg("--out")
-        .arg(&out)
-        .args([
+    let r = study(
+        &gt,
+        &out,
+        &[
             "--strategy",
             "uniform,advised",
             "--budget",
@@ -94,9 +101,8 @@ fn strategy_study_compares_uniform_and_advised_slices() {
             "--label",
             "1",
             "--quiet",
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let csv = std::fs::read_to_string(out.join("strategy.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv
@@ -129,14 +135,7 @@ fn strategy_study_compares_uniform_and_advised_slices() {
     let md = std::fs::read_to_string(out.join("strategy.md")).unwrap();
     assert!(md.contains("| 4 | 6 |"), "{md}");
     // An unknown strategy is a one-line error.
-    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
-        .arg("study")
-        .arg(&gt)
-        .arg("--out")
-        .arg(&out)
-        .args(["--strategy", "random"])
-        .output()
-        .unwrap();
+    let r = study(&gt, &out, &["--strategy", "random"]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown strategy 'random'"));
 }
@@ -145,26 +144,20 @@ fn strategy_study_compares_uniform_and_advised_slices() {
 fn study_prints_minutes_per_cell_for_a_simulated_tracer() {
     let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("effort");
-    let study = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_interslice"))
-            .arg("study")
-            .arg(&gt)
-            .arg("--out")
-            .arg(&out)
-            .args([
-                "--skips",
-                "2,4",
-                "--methods",
-                "shape-based",
-                "--label",
-                "2",
-                "--quiet",
-            ])
-            .args(extra)
-            .output()
-            .unwrap()
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "--skips",
+            "2,4",
+            "--methods",
+            "shape-based",
+            "--label",
+            "2",
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        study(&gt, &out, &args)
     };
-    let r = study(&["--seconds-per-contour", "30"]);
+    let r = run(&["--seconds-per-contour", "30"]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let stdout = String::from_utf8_lossy(&r.stdout).to_string();
     let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
@@ -207,7 +200,7 @@ fn study_prints_minutes_per_cell_for_a_simulated_tracer() {
     assert!(md.contains("## Time to ground truth") && md.contains("30 s per traced slice"));
     // The time per contour is bounded.
     for bad in ["0", "3601", "x"] {
-        let r = study(&["--seconds-per-contour", bad]);
+        let r = run(&["--seconds-per-contour", bad]);
         assert!(!r.status.success(), "{bad}");
         assert!(
             String::from_utf8_lossy(&r.stderr).contains("--seconds-per-contour"),
@@ -243,12 +236,10 @@ fn study_rejects_bad_arguments() {
 fn the_oracle_strategy_is_the_ceiling_of_one_slice() {
     let (dir, gt) = phantom_ground_truth();
     let out = dir.path().join("oracle");
-    let r = Command::new(env!("CARGO_BIN_EXE_interslice"))
-        .arg("study")
-        .arg(&gt)
-        .arg("--out")
-        .arg(&out)
-        .args([
+    let r = study(
+        &gt,
+        &out,
+        &[
             "--strategy",
             "uniform,oracle",
             "--budget",
@@ -256,9 +247,8 @@ fn the_oracle_strategy_is_the_ceiling_of_one_slice() {
             "--label",
             "2",
             "--quiet",
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let csv = std::fs::read_to_string(out.join("strategy.csv")).unwrap();
     let row = |strategy: &str, budget: &str| -> (f64, Vec<usize>) {
