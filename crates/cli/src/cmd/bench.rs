@@ -14,6 +14,7 @@
 use anyhow::{Context, Result, bail};
 use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_interp::image::walk::RandomWalk;
 use interslice_interp::image::{ImageGuided, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, score};
 use interslice_interp::{Interpolator, by_name};
@@ -31,11 +32,13 @@ pub struct Args {
     /// Numbers of skipped slices, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1,3,5,9")]
     pub skips: Vec<usize>,
-    /// Methods, comma-separated (`image-guided` runs where the mask has an image).
+    /// Methods, comma-separated (`image-guided` and the image anchor
+    /// `random-walk`, a 3D random walker seeded by the drawn slices, run where
+    /// the mask has an image).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "nearest,shape-based,shape-aligned,shape-auto,image-guided"
+        default_value = "nearest,shape-based,shape-aligned,shape-auto,image-guided,random-walk"
     )]
     pub methods: Vec<String>,
     /// Also print one line per mask.
@@ -86,10 +89,8 @@ pub fn run(a: Args) -> Result<()> {
     let mut rows = Vec::new();
     for c in &cases {
         for name in &a.methods {
-            let method: Box<dyn Interpolator> = match (name.as_str(), &c.image) {
-                ("image-guided", Some(img)) => Box::new(ImageGuided::new(img.clone())),
-                ("image-guided", None) => continue,
-                (n, _) => by_name(n)?,
+            let Some(method) = method_on(name, c.image.as_ref())? else {
+                continue;
             };
             for &k in &a.skips {
                 let Some(s) = score(method.as_ref(), &c.mask, Axis::Z, k)
@@ -217,6 +218,20 @@ fn read_on_grid(path: &Path, labels: &LabelVolume) -> Result<Volume<f32>> {
     Ok(img)
 }
 
+/// The method `name`, on `image` for the image methods (`None`: an image
+/// method without an image, skipped).
+fn method_on(
+    name: &str,
+    image: Option<&Arc<Volume<f32>>>,
+) -> Result<Option<Box<dyn Interpolator>>> {
+    Ok(match (name, image) {
+        ("image-guided", Some(img)) => Some(Box::new(ImageGuided::new(img.clone()))),
+        ("random-walk", Some(img)) => Some(Box::new(RandomWalk::new(img.clone()))),
+        ("image-guided" | "random-walk", None) => None,
+        (n, _) => Some(by_name(n)?),
+    })
+}
+
 /// A case cropped to its mask's box grown by [`MARGIN`].
 fn cropped(
     family: &'static str,
@@ -321,11 +336,7 @@ fn speed(methods: &[String]) -> Result<()> {
         let m = crop(&mask, bbox)?;
         let img = Arc::new(crop(&image, bbox)?);
         for name in methods {
-            let method: Box<dyn Interpolator> = if name == "image-guided" {
-                Box::new(ImageGuided::new(img.clone()))
-            } else {
-                by_name(name)?
-            };
+            let method = method_on(name, Some(&img))?.context("an image method needs the image")?;
             let s =
                 score(method.as_ref(), &m, Axis::Z, 5)?.context("the cell shows on the crop")?;
             println!(

@@ -30,6 +30,7 @@
 //! objects that the prior keeps apart.
 pub mod fuse;
 pub mod model;
+pub mod walk;
 
 use crate::auto::{ShapeAuto, candidates};
 use crate::confidence::{shape_confidence, sigmoid};
