@@ -60,7 +60,7 @@ pub struct LabelBox {
 
 /// In-plane extent `[u_lo, u_hi, v_lo, v_hi]` of the pixels inside, on a
 /// slice `w` pixels wide; `None` when there are none.
-fn extent(inside: &[bool], w: usize) -> Option<[usize; 4]> {
+pub(crate) fn extent(inside: &[bool], w: usize) -> Option<[usize; 4]> {
     let mut e: Option<[usize; 4]> = None;
     for (p, _) in inside.iter().enumerate().filter(|(_, x)| **x) {
         let (u, v) = (p % w, p / w);
@@ -68,6 +68,18 @@ fn extent(inside: &[bool], w: usize) -> Option<[usize; 4]> {
         *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
     }
     e
+}
+
+/// The extent holding every one of `extents`; `None` when there are none.
+pub(crate) fn joint_extent(extents: impl IntoIterator<Item = [usize; 4]>) -> Option<[usize; 4]> {
+    extents.into_iter().reduce(|e, x| {
+        [
+            e[0].min(x[0]),
+            e[1].max(x[1]),
+            e[2].min(x[2]),
+            e[3].max(x[3]),
+        ]
+    })
 }
 
 /// The largest step, in pixels, of any side of the outlines' extent between
@@ -114,14 +126,7 @@ impl LabelBox {
         let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| extent(s.inside, w)).collect();
         let first = extents.iter().position(Option::is_some);
         let last = extents.iter().rposition(Option::is_some);
-        let ext = extents.iter().flatten().copied().reduce(|e, x| {
-            [
-                e[0].min(x[0]),
-                e[1].max(x[1]),
-                e[2].min(x[2]),
-                e[3].max(x[3]),
-            ]
-        });
+        let ext = joint_extent(extents.iter().flatten().copied());
         let ([u0, u1, v0, v1], first, last) = (ext?, first?, last?);
         let margin = if follows_drift {
             MARGIN + 3 * drift(&extents)

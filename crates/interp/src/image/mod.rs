@@ -144,17 +144,6 @@ impl ImageGuided {
         self
     }
 
-    fn check_grid(&self, input: &SparseMask<'_>) -> Result<(), InterpError> {
-        let (a, b) = (self.image.geometry(), input.mask.geometry());
-        if a.dims != b.dims {
-            return Err(InterpError::Input(format!(
-                "the image is {:?} voxels but the tracing is {:?}: the image must lie on the tracing's grid",
-                a.dims, b.dims
-            )));
-        }
-        Ok(())
-    }
-
     fn image_slice(&self, vol: &Volume<f32>, input: &SparseMask<'_>, s: usize) -> Vec<f32> {
         let plane = Plane::of(input);
         let raw = vol.slice(input.axis, s).expect("slice in range");
@@ -164,7 +153,7 @@ impl ImageGuided {
     /// Decide, on the drawn slices of `input`, the prior and the fusion.
     pub fn plan(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
         input.validate()?;
-        self.check_grid(input)?;
+        check_grid(&self.image, input)?;
         let plane = Plane::of(input);
         let choice = ShapeAuto.choose(input)?;
         let prior = choice.index;
@@ -390,6 +379,19 @@ impl Interpolator for ImageGuided {
         let stacked = crate::loo::stack(&self.image, axis, real)?;
         Ok(Some(Box::new(ImageGuided::new(Arc::new(stacked)))))
     }
+}
+
+/// An error unless `image` lies on the grid of `input`'s tracing (what
+/// every image method checks before reading it).
+pub(crate) fn check_grid(image: &Volume<f32>, input: &SparseMask<'_>) -> Result<(), InterpError> {
+    let (a, b) = (image.geometry(), input.mask.geometry());
+    if a.dims != b.dims {
+        return Err(InterpError::Input(format!(
+            "the image is {:?} voxels but the tracing is {:?}: the image must lie on the tracing's grid",
+            a.dims, b.dims
+        )));
+    }
+    Ok(())
 }
 
 /// The intensities of any voxel type as `f32` (the values unchanged, not rescaled).

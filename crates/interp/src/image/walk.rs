@@ -19,6 +19,8 @@
 //! Drawn slices are copied; drawn-empty slices are seeds outside, so they
 //! stay empty. The walk does not keep objects apart that the tracing keeps
 //! apart: it is a benchmark anchor, not a default.
+use crate::crop::{extent, joint_extent};
+use crate::image::check_grid;
 use crate::slices::{Plane, assemble};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Mask, Volume};
@@ -75,13 +77,7 @@ impl Interpolator for RandomWalk {
 
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         input.validate()?;
-        let (a, b) = (self.image.geometry(), input.mask.geometry());
-        if a.dims != b.dims {
-            return Err(InterpError::Input(format!(
-                "the image is {:?} voxels but the tracing is {:?}: the image must lie on the tracing's grid",
-                a.dims, b.dims
-            )));
-        }
+        check_grid(&self.image, &input)?;
         let plane = Plane::of(&input);
         let drawn = input.drawn;
         let slices: Vec<Vec<bool>> = drawn
@@ -115,17 +111,8 @@ impl Interpolator for RandomWalk {
 /// last drawn slice; `None` when no drawn slice shows the label.
 fn walk_box(slices: &[Vec<bool>], plane: &Plane, drawn: &[usize]) -> Option<Box3> {
     let (w, h) = (plane.width, plane.height);
-    let (mut u0, mut u1, mut v0, mut v1) = (usize::MAX, 0, usize::MAX, 0);
-    for s in slices {
-        for (i, _) in s.iter().enumerate().filter(|(_, x)| **x) {
-            let (u, v) = (i % w, i / w);
-            u0 = u0.min(u);
-            u1 = u1.max(u);
-            v0 = v0.min(v);
-            v1 = v1.max(v);
-        }
-    }
-    (u0 != usize::MAX).then(|| Box3 {
+    let [u0, u1, v0, v1] = joint_extent(slices.iter().filter_map(|s| extent(s, w)))?;
+    Some(Box3 {
         u: (u0.saturating_sub(MARGIN), (u1 + MARGIN + 1).min(w)),
         v: (v0.saturating_sub(MARGIN), (v1 + MARGIN + 1).min(h)),
         s: (drawn[0], drawn[drawn.len() - 1] + 1),
