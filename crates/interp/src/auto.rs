@@ -24,6 +24,7 @@ use crate::nearest::Nearest;
 use crate::shape_based::ShapeBased;
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
+use rayon::prelude::*;
 
 /// Pooled Dice a later candidate must gain over an earlier one to be chosen.
 pub const MARGIN: f64 = 0.002;
@@ -64,11 +65,16 @@ impl ShapeAuto {
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
         let near = near_label(input)?;
         let compact = Compact::of(&SparseMask::new(input.mask, input.axis, &near))?;
-        let cands = candidates();
+        // The candidates run side by side: each one's runs on the compact
+        // stack are too small to keep every core busy on their own.
+        let runs: Vec<Result<Vec<HeldOut>, InterpError>> = candidates()
+            .par_iter()
+            .map(|c| compact.held_out(c.as_ref()))
+            .collect();
         let mut scores = Vec::new();
         let mut preds = Vec::new();
-        for c in &cands {
-            let held = compact.held_out(c.as_ref())?;
+        for held in runs {
+            let held = held?;
             if held.is_empty() {
                 return Ok(Choice {
                     index: 0,

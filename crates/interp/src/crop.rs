@@ -102,6 +102,20 @@ pub struct DrawnSlice<'a> {
     pub index: usize,
     /// Pixels inside the traced outline.
     pub inside: &'a [bool],
+    /// Their in-plane extent ([`extent`] of `inside`), known to the caller
+    /// that read the slice, so the box does not scan every slice again.
+    pub extent: Option<[usize; 4]>,
+}
+
+impl<'a> DrawnSlice<'a> {
+    /// A drawn slice `w` pixels wide, its extent measured.
+    pub fn new(index: usize, inside: &'a [bool], w: usize) -> DrawnSlice<'a> {
+        DrawnSlice {
+            index,
+            inside,
+            extent: extent(inside, w),
+        }
+    }
 }
 
 impl LabelBox {
@@ -123,7 +137,7 @@ impl LabelBox {
         let (a, b) = axis.in_plane();
         let (w, h) = (dims[a], dims[b]);
         // In-plane extent of each drawn slice's outlines: [u_lo, u_hi, v_lo, v_hi].
-        let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| extent(s.inside, w)).collect();
+        let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| s.extent).collect();
         let first = extents.iter().position(Option::is_some);
         let last = extents.iter().rposition(Option::is_some);
         let ext = joint_extent(extents.iter().flatten().copied());
@@ -201,18 +215,16 @@ impl LabelBox {
         };
         let g = result.geometry();
         let data = result.data();
-        let [nx, ny, nz] = self.dims;
-        (0..nz).any(|k| {
-            (0..ny).any(|j| {
-                (0..nx).any(|i| {
-                    let p = [i, j, k];
-                    data[g.index(i, j, k)]
-                        && [a, b].iter().any(|&dim| {
-                            (p[dim] == 0 && open(dim, true))
-                                || (p[dim] + 1 == self.dims[dim] && open(dim, false))
-                        })
-                })
-            })
+        // Only the voxels on the open sides are read: a face of the box is
+        // the voxels with one coordinate fixed.
+        let face_reached = |dim: usize, at: usize| {
+            let [nx, ny, nz] = self.dims;
+            let range = |d: usize, n: usize| if d == dim { at..at + 1 } else { 0..n };
+            range(2, nz).any(|k| range(1, ny).any(|j| range(0, nx).any(|i| data[g.index(i, j, k)])))
+        };
+        [a, b].iter().any(|&dim| {
+            (open(dim, true) && face_reached(dim, 0))
+                || (open(dim, false) && face_reached(dim, self.dims[dim] - 1))
         })
     }
 
@@ -265,7 +277,7 @@ mod tests {
             }
         }
         let off = vec![false; 200];
-        let at = |index, inside| DrawnSlice { index, inside };
+        let at = |index, inside| DrawnSlice::new(index, inside, 20);
         let slices = [
             at(0, &off[..]),
             at(3, &off),

@@ -84,16 +84,22 @@ fn run<T: Voxel>(
             drawn.len()
         )));
     }
-    let labels: Vec<u16> = drawn_labels(sparse, axis, &drawn);
-    let results: Vec<LabelResult> = labels
-        .par_iter()
-        .map(|&l| {
-            let filled = traced_slices(sparse, axis, &drawn, l);
+    let planes = Planes::read(sparse, axis, &drawn);
+    let labels = &planes.labels;
+    let results: Vec<LabelResult> = (0..labels.len())
+        .into_par_iter()
+        .map(|li| {
+            let filled = planes.traced(li);
             if !confidence {
                 let slices: Vec<DrawnSlice<'_>> = drawn
                     .iter()
                     .zip(&filled)
-                    .map(|(&index, inside)| DrawnSlice { index, inside })
+                    .zip(&planes.extents)
+                    .map(|((&index, inside), e)| DrawnSlice {
+                        index,
+                        inside,
+                        extent: e[li],
+                    })
                     .collect();
                 let dims = sparse.geometry().dims;
                 if let Some(b) = LabelBox::of(dims, axis, &slices, method.box_reach())
@@ -164,13 +170,114 @@ pub fn sorted_drawn(
 /// interpolating a volume that may be an intensity image). `drawn` must be
 /// valid indices along `axis`.
 pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u16> {
-    let mut seen = vec![false; 65536];
-    for &d in drawn {
-        for v in sparse.slice(axis, d).expect("validated drawn index") {
-            seen[v as usize] = true;
+    Planes::read(sparse, axis, drawn).labels
+}
+
+/// The drawn slices of a label volume, read once for all labels: each
+/// slice's labels and, per label, its in-plane extent there. A label's
+/// traced slices are then worked out on its extent only, so the cost of many
+/// labels is their outlines', not the slices' times their number.
+struct Planes {
+    /// Slice width and height.
+    w: usize,
+    h: usize,
+    /// Each drawn slice, row-major.
+    planes: Vec<Vec<u16>>,
+    /// Labels on any drawn slice, ascending.
+    labels: Vec<u16>,
+    /// Per drawn slice, per label (as indexed in `labels`): its extent
+    /// `[u_lo, u_hi, v_lo, v_hi]`, as [`crate::crop`] measures outlines.
+    extents: Vec<Vec<Option<[usize; 4]>>>,
+}
+
+impl Planes {
+    fn read(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Planes {
+        let (w, h) = sparse.slice_shape(axis);
+        let planes: Vec<Vec<u16>> = drawn
+            .par_iter()
+            .map(|&d| sparse.slice(axis, d).expect("validated drawn index"))
+            .collect();
+        // Which values occur, per slice in parallel (a plain store per
+        // pixel: setting bits would chain every pixel through one word).
+        let seen = planes
+            .par_iter()
+            .fold(
+                || vec![false; 65536],
+                |mut seen, p| {
+                    p.iter().for_each(|&v| seen[v as usize] = true);
+                    seen
+                },
+            )
+            .reduce(
+                || vec![false; 65536],
+                |mut a, b| {
+                    a.iter_mut().zip(&b).for_each(|(x, y)| *x |= y);
+                    a
+                },
+            );
+        let labels: Vec<u16> = (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect();
+        let mut index = vec![u32::MAX; 65536];
+        for (i, &l) in labels.iter().enumerate() {
+            index[l as usize] = i as u32;
+        }
+        let extents = planes
+            .par_iter()
+            .map(|p| {
+                let mut e: Vec<Option<[usize; 4]>> = vec![None; labels.len()];
+                for (v, row) in p.chunks_exact(w).enumerate() {
+                    for (u, &l) in row.iter().enumerate().filter(|(_, l)| **l != 0) {
+                        let x = e[index[l as usize] as usize].get_or_insert([u, u, v, v]);
+                        *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
+                    }
+                }
+                e
+            })
+            .collect();
+        Planes {
+            w,
+            h,
+            planes,
+            labels,
+            extents,
         }
     }
-    (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect()
+
+    /// The whole structure of label `li` on each drawn slice
+    /// ([`whole_structure`] with 8-connected holes), worked out on its
+    /// extent grown by one pixel: a hole is enclosed by the label, so inside
+    /// its extent, and the ring of other pixels around the extent is open
+    /// as the rest of the slice is.
+    fn traced(&self, li: usize) -> Vec<Vec<bool>> {
+        let label = self.labels[li];
+        let (w, h) = (self.w, self.h);
+        self.planes
+            .par_iter()
+            .zip(&self.extents)
+            .map(|(p, e)| {
+                let mut out = vec![false; w * h];
+                let Some([u0, u1, v0, v1]) = e[li] else {
+                    return out;
+                };
+                let (u0, v0) = (u0.saturating_sub(1), v0.saturating_sub(1));
+                let (u1, v1) = ((u1 + 1).min(w - 1), (v1 + 1).min(h - 1));
+                let cw = u1 - u0 + 1;
+                let crop: Vec<u16> = (v0..=v1)
+                    .flat_map(|v| p[u0 + w * v..=u1 + w * v].iter().copied())
+                    .collect();
+                let g = Geometry::new([cw, v1 - v0 + 1, 1], [1.0; 3], Default::default())
+                    .expect("crop of a valid slice");
+                let crop = Volume::from_vec(g, crop).expect("crop size");
+                let inside = whole_structure(&crop, label, Connectivity::Full)
+                    .into_parts()
+                    .1;
+                for (v, row) in inside.chunks_exact(cw).enumerate() {
+                    let at = u0 + w * (v0 + v);
+                    out[at..at + cw].copy_from_slice(row);
+                }
+                out
+            })
+            .collect()
+    }
 }
 
 /// The traced mask of `label` on the drawn slices (other slices empty): the
@@ -186,21 +293,16 @@ pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16
 }
 
 /// The whole structure of `label` on each drawn slice, row-major as
-/// [`Volume::slice`] gives it.
+/// [`Volume::slice`] gives it (empty slices when the label is on none).
 fn traced_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Vec<Vec<bool>> {
-    let (w, h) = sparse.slice_shape(axis);
-    drawn
-        .par_iter()
-        .map(|&d| {
-            let s = sparse.slice(axis, d).expect("validated drawn index");
-            let g = Geometry::new([w, h, 1], [1.0; 3], sparse.geometry().unit)
-                .expect("slice dims of a valid volume");
-            let slice = Volume::from_vec(g, s).expect("slice size");
-            whole_structure(&slice, label, Connectivity::Full)
-                .into_parts()
-                .1
-        })
-        .collect()
+    let planes = Planes::read(sparse, axis, drawn);
+    match planes.labels.binary_search(&label) {
+        Ok(li) => planes.traced(li),
+        Err(_) => {
+            let (w, h) = sparse.slice_shape(axis);
+            vec![vec![false; w * h]; drawn.len()]
+        }
+    }
 }
 
 /// A mask of `sparse`'s grid holding `filled` on the drawn slices.
@@ -210,4 +312,36 @@ fn mask_of_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], filled: &[V
         m.set_slice(axis, d, f).expect("slice shape matches");
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Worked out on each label's extent, the traced slices are the
+        /// whole slice's [`whole_structure`], holes, nested labels, thin
+        /// labels and labels on the slice's edge included.
+        #[test]
+        fn a_labels_traced_slices_on_its_extent_are_the_whole_slices(
+            w in 1usize..12,
+            h in 1usize..12,
+            seed in proptest::collection::vec(0u16..4, 144 * 2),
+        ) {
+            let g = Geometry::new([w, h, 2], [1.0; 3], Default::default()).unwrap();
+            let data: Vec<u16> = seed[..w * h * 2].to_vec();
+            let vol = Volume::from_vec(g, data).unwrap();
+            let planes = Planes::read(&vol, Axis::Z, &[0, 1]);
+            for (li, &l) in planes.labels.iter().enumerate() {
+                let traced = planes.traced(li);
+                for (k, got) in traced.iter().enumerate() {
+                    let g1 = Geometry::new([w, h, 1], [1.0; 3], Default::default()).unwrap();
+                    let s = Volume::from_vec(g1, vol.slice(Axis::Z, k).unwrap()).unwrap();
+                    let want = whole_structure(&s, l, Connectivity::Full).into_parts().1;
+                    prop_assert_eq!(got, &want, "label {} slice {}", l, k);
+                }
+            }
+        }
+    }
 }

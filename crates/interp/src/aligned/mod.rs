@@ -165,28 +165,66 @@ impl Crop {
         Crop { u0, v0, w, h, d }
     }
 
-    /// Bilinear sample at pixel-index position (pu, pv) of the full slice
-    /// (pixel centres at integers here); far outside the crop.
+    /// The row at pixel-index position `pv` of the full slice, to sample
+    /// bilinearly along it ([`CropRow::at`]): the blend of a skipped slice
+    /// reads each crop at one sub-pixel shift, so the vertical weights and
+    /// rows are the same for a whole row of pixels. `None` (every sample
+    /// far) when the row is outside the crop.
     #[inline]
-    fn sample(&self, pu: f64, pv: f64) -> f32 {
-        let x = pu - self.u0 as f64;
+    fn row(&self, pv: f64) -> Option<CropRow<'_>> {
         let y = pv - self.v0 as f64;
-        if x < 0.0 || y < 0.0 || x > (self.w - 1) as f64 || y > (self.h - 1) as f64 {
-            return FAR;
+        if y < 0.0 || y > (self.h - 1) as f64 {
+            return None;
         }
-        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-        let (x1, y1) = ((x0 + 1).min(self.w - 1), (y0 + 1).min(self.h - 1));
-        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-        let at = |a: usize, b: usize| self.d[a + self.w * b];
-        let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
-        let bot = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
-        top * (1.0 - fy) + bot * fy
+        // y >= 0: the cast truncates as floor would (without a libm call).
+        let y0 = y as usize;
+        let y1 = (y0 + 1).min(self.h - 1);
+        Some(CropRow {
+            r0: &self.d[self.w * y0..self.w * (y0 + 1)],
+            r1: &self.d[self.w * y1..self.w * (y1 + 1)],
+            fy: (y - y0 as f64) as f32,
+            u0: self.u0 as f64,
+        })
     }
 
     /// Deepest inside distance (positive).
     fn depth(&self) -> f32 {
         -self.d.iter().copied().fold(0.0f32, f32::min)
     }
+}
+
+/// Two rows of a crop's map and the vertical weight between them.
+struct CropRow<'a> {
+    r0: &'a [f32],
+    r1: &'a [f32],
+    fy: f32,
+    /// The crop's first column in the full slice.
+    u0: f64,
+}
+
+impl CropRow<'_> {
+    /// Bilinear sample at pixel-index column `pu` of the full slice (pixel
+    /// centres at integers); far outside the crop.
+    #[inline]
+    fn at(&self, pu: f64) -> f32 {
+        let x = pu - self.u0;
+        let w = self.r0.len();
+        if x < 0.0 || x > (w - 1) as f64 {
+            return FAR;
+        }
+        let x0 = x as usize;
+        let x1 = (x0 + 1).min(w - 1);
+        let fx = (x - x0 as f64) as f32;
+        let top = self.r0[x0] * (1.0 - fx) + self.r0[x1] * fx;
+        let bot = self.r1[x0] * (1.0 - fx) + self.r1[x1] * fx;
+        top * (1.0 - self.fy) + bot * self.fy
+    }
+}
+
+/// Bilinear sample of an optional row: far where there is none.
+#[inline]
+fn sample_row(row: &Option<CropRow<'_>>, pu: f64) -> f32 {
+    row.as_ref().map_or(FAR, |r| r.at(pu))
 }
 
 /// Bounding box `[u0, v0, u1, v1)` of a group of components.
@@ -621,10 +659,16 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
         t3 - t2,
     );
     for v in v0..v1 {
+        let pv = v as f64;
+        let (ra, rb) = (ca.row(pv + sa[1]), cb.row(pv + sb[1]));
+        if ra.is_none() && rb.is_none() {
+            // Both far: outside on either side.
+            continue;
+        }
         for u in u0..u1 {
-            let (pu, pv) = (u as f64, v as f64);
-            let ya = ca.sample(pu + sa[0], pv + sa[1]);
-            let yb = cb.sample(pu + sb[0], pv + sb[1]);
+            let pu = u as f64;
+            let ya = sample_row(&ra, pu + sa[0]);
+            let yb = sample_row(&rb, pu + sb[0]);
             // Where both sides agree, the neighbouring slices need not be read.
             if let Some(inside) = agreed_inside(ya, yb) {
                 if inside {
