@@ -84,7 +84,9 @@ fi
 
 if wanted itk && [ ! -f "$cache/itk/T1_kmeans.nii.gz" ]; then
   if [ ! -f "$dl/$ITK_DEB" ]; then
-    (cd "$dl" && apt-get download "insighttoolkit5-examples=5.2.1-5+deb12u1" >/dev/null 2>&1) \
+    get_deb() { (cd "$dl" && apt-get download "insighttoolkit5-examples=5.2.1-5+deb12u1" >/dev/null 2>&1); }
+    # A fresh machine has no package lists yet: as root, fetch them once.
+    get_deb || { [ "$(id -u)" = 0 ] && apt-get update -qq >/dev/null 2>&1 && get_deb; } \
       || unreachable "insighttoolkit5-examples (run apt-get update first)"
   fi
   check "$dl/$ITK_DEB" "$ITK_SHA"

@@ -143,7 +143,7 @@ fn smooth(z: &mut [f32], phi: &[f32], image: &[f32], plane: &Plane, b: f32, lamb
 }
 
 /// The mask `z > 0`, keeping the prior's objects apart (see the module doc).
-fn separate(phi: &[f32], z: &[f32], plane: &Plane, b: f32) -> Vec<bool> {
+pub(crate) fn separate(phi: &[f32], z: &[f32], plane: &Plane, b: f32) -> Vec<bool> {
     let (w, h) = (plane.width, plane.height);
     // Objects of the prior (8-connected) grown breadth-first through the band.
     let prior: Vec<bool> = phi.iter().map(|&p| p < 0.0).collect();

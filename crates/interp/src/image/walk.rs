@@ -17,13 +17,15 @@
 //! of a grid matrix-free, and assembling it would triple the memory.
 //!
 //! Drawn slices are copied; drawn-empty slices are seeds outside, so they
-//! stay empty. The walk does not keep objects apart that the tracing keeps
-//! apart: it is a benchmark anchor, not a default.
+//! stay empty. On its own (`interslice bench`'s `random-walk`) the walk does
+//! not keep objects apart that the tracing keeps apart: it is the
+//! benchmark's anchor. `image-guided` runs it seeded by a shape prior
+//! outside a band ([`RandomWalk::walk_with`]) and keeps its objects apart.
 use crate::crop::{extent, joint_extent};
 use crate::image::check_grid;
 use crate::slices::{Plane, assemble};
 use crate::{InterpError, Interpolator, SparseMask};
-use interslice_core::{Axis, Mask, Volume};
+use interslice_core::{Mask, Volume};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -76,34 +78,76 @@ impl Interpolator for RandomWalk {
     }
 
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
-        input.validate()?;
-        check_grid(&self.image, &input)?;
+        let walked = self.walk(&input)?;
         let plane = Plane::of(&input);
+        assemble(&input, |s| {
+            let z = walked.as_ref()?.logit(s, &plane)?;
+            Some(z.iter().map(|&x| x > 0.0).collect())
+        })
+    }
+}
+
+impl RandomWalk {
+    /// The walk's probabilities on the label's box; `None` when no drawn
+    /// slice shows the label.
+    pub fn walk(&self, input: &SparseMask<'_>) -> Result<Option<Walked>, InterpError> {
+        self.walk_with(input, None)
+    }
+
+    /// [`RandomWalk::walk`] with more seeds on the skipped slices:
+    /// `seeds[s]`, when given, holds slice `s` row-major, 1 (inside) or 0
+    /// (outside) where the value is known and NaN where the walk decides.
+    /// Seeding all but a band around a shape prior leaves the walk a thin
+    /// shell to solve, with seeds close to every unknown voxel: it runs in
+    /// a fraction of the whole box's time ([`crate::image::ImageGuided`]).
+    pub fn walk_with(
+        &self,
+        input: &SparseMask<'_>,
+        seeds: Option<&[Option<Vec<f32>>]>,
+    ) -> Result<Option<Walked>, InterpError> {
+        input.validate()?;
+        check_grid(&self.image, input)?;
+        let plane = Plane::of(input);
         let drawn = input.drawn;
         let slices: Vec<Vec<bool>> = drawn
             .iter()
             .map(|&d| input.mask.slice(input.axis, d))
             .collect::<Result<_, _>>()?;
         let Some(bx) = walk_box(&slices, &plane, drawn) else {
-            return assemble(&input, |_| None);
+            return Ok(None);
         };
-        let p = walk(&self.image, input.axis, &plane, &bx, drawn, &slices, &input)?;
+        let p = walk(&self.image, &plane, &bx, (drawn, &slices), seeds, input)?;
+        Ok(Some(Walked { bx, p }))
+    }
+}
+
+/// The probability of "inside" the walk gave each voxel of its box.
+pub struct Walked {
+    bx: Box3,
+    /// `u` fastest, as [`walk`] returns it.
+    p: Vec<f32>,
+}
+
+impl Walked {
+    /// `p − ½` on slice `s` (row-major on the whole slice; `> 0` inside,
+    /// `−½` outside the box), or `None` for a slice not strictly between
+    /// the box's first and last (drawn) slices.
+    pub fn logit(&self, s: usize, plane: &Plane) -> Option<Vec<f32>> {
+        let bx = &self.bx;
+        if s <= bx.s.0 || s + 1 >= bx.s.1 {
+            return None;
+        }
         let [nu, nv, _] = bx.dims();
-        assemble(&input, |s| {
-            if s <= bx.s.0 || s >= bx.s.1 - 1 {
-                return None;
+        let k = s - bx.s.0;
+        let mut out = vec![-0.5f32; plane.width * plane.height];
+        for v in 0..nv {
+            let src = &self.p[nu * (v + nv * k)..][..nu];
+            let at = bx.u.0 + plane.width * (bx.v.0 + v);
+            for (o, &p) in out[at..at + nu].iter_mut().zip(src) {
+                *o = p - 0.5;
             }
-            let k = s - bx.s.0;
-            let mut out = vec![false; plane.width * plane.height];
-            for v in 0..nv {
-                for u in 0..nu {
-                    if p[u + nu * (v + nv * k)] > 0.5 {
-                        out[(bx.u.0 + u) + plane.width * (bx.v.0 + v)] = true;
-                    }
-                }
-            }
-            Some(out)
-        })
+        }
+        Some(out)
     }
 }
 
@@ -122,13 +166,13 @@ fn walk_box(slices: &[Vec<bool>], plane: &Plane, drawn: &[usize]) -> Option<Box3
 /// The probability of "inside" on every voxel of the box (`u` fastest).
 fn walk(
     image: &Volume<f32>,
-    axis: Axis,
     plane: &Plane,
     bx: &Box3,
-    drawn: &[usize],
-    slices: &[Vec<bool>],
+    (drawn, slices): (&[usize], &[Vec<bool>]),
+    seeds: Option<&[Option<Vec<f32>>]>,
     input: &SparseMask<'_>,
 ) -> Result<Vec<f32>, InterpError> {
+    let axis = input.axis;
     let [nu, nv, ns] = bx.dims();
     let n = nu * nv * ns;
     let idx = |u: usize, v: usize, k: usize| u + nu * (v + nv * k);
@@ -151,14 +195,25 @@ fn walk(
     let sd = var.sqrt().max(1e-12);
     img.par_iter_mut()
         .for_each(|x| *x = ((f64::from(*x) - mean) / sd) as f32);
-    // Seeds: 1 inside, 0 outside on drawn slices; NaN = unknown.
+    // Seeds: 1 inside, 0 outside on drawn slices (and where `seeds` say);
+    // NaN = unknown.
     let mut x = vec![f32::NAN; n];
-    for (&d, s) in drawn.iter().zip(slices) {
-        let k = d - bx.s.0;
+    let mut put = |k: usize, plane_values: &dyn Fn(usize) -> f32| {
         for v in 0..nv {
             for u in 0..nu {
-                let inside = s[(bx.u.0 + u) + plane.width * (bx.v.0 + v)];
-                x[idx(u, v, k)] = if inside { 1.0 } else { 0.0 };
+                x[idx(u, v, k)] = plane_values((bx.u.0 + u) + plane.width * (bx.v.0 + v));
+            }
+        }
+    };
+    for (&d, s) in drawn.iter().zip(slices) {
+        put(d - bx.s.0, &|i| if s[i] { 1.0 } else { 0.0 });
+    }
+    if let Some(seeds) = seeds {
+        for k in 0..ns {
+            if let Some(Some(s)) = seeds.get(bx.s.0 + k)
+                && drawn.binary_search(&(bx.s.0 + k)).is_err()
+            {
+                put(k, &|i| s[i]);
             }
         }
     }
@@ -198,38 +253,37 @@ fn walk(
         }
         (out, m)
     };
-    let unknown: Vec<bool> = x.iter().map(|v| v.is_nan()).collect();
+    // The unknown voxels, and each voxel's place among them: the system is
+    // solved on them only (a band leaves few).
+    let unk: Vec<usize> = (0..n).filter(|&i| x[i].is_nan()).collect();
+    let mut at = vec![u32::MAX; n];
+    for (a, &i) in unk.iter().enumerate() {
+        at[i] = a as u32;
+    }
     // Degree and right-hand side (the weights to inside seeds).
-    let (deg, rhs): (Vec<f32>, Vec<f32>) = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if !unknown[i] {
-                return (1.0, 0.0);
-            }
+    let (deg, rhs): (Vec<f32>, Vec<f32>) = unk
+        .par_iter()
+        .map(|&i| {
             let (nb, m) = nbrs(i);
             let mut d = 0.0;
             let mut r = 0.0;
             for &(j, w) in &nb[..m] {
                 d += w;
-                if !unknown[j] {
+                if at[j] == u32::MAX {
                     r += w * x[j];
                 }
             }
             (d, r)
         })
         .unzip();
-    // L_uu · p over the unknown voxels (0 elsewhere).
+    // L_uu · p over the unknown voxels.
     let apply = |p: &[f32], out: &mut [f32]| {
-        out.par_iter_mut().enumerate().for_each(|(i, o)| {
-            if !unknown[i] {
-                *o = 0.0;
-                return;
-            }
-            let (nb, m) = nbrs(i);
-            let mut acc = deg[i] * p[i];
+        out.par_iter_mut().enumerate().for_each(|(a, o)| {
+            let (nb, m) = nbrs(unk[a]);
+            let mut acc = deg[a] * p[a];
             for &(j, w) in &nb[..m] {
-                if unknown[j] {
-                    acc -= w * p[j];
+                if at[j] != u32::MAX {
+                    acc -= w * p[at[j] as usize];
                 }
             }
             *o = acc;
@@ -241,13 +295,12 @@ fn walk(
             .map(|(&x, &y)| f64::from(x) * f64::from(y))
             .sum()
     };
-    // Preconditioned conjugate gradients from 0.5 on the unknown voxels.
-    let mut sol: Vec<f32> = unknown.iter().map(|&u| if u { 0.5 } else { 0.0 }).collect();
-    let mut ap = vec![0f32; n];
+    // Preconditioned conjugate gradients from 0.5.
+    let nu_ = unk.len();
+    let mut sol = vec![0.5f32; nu_];
+    let mut ap = vec![0f32; nu_];
     apply(&sol, &mut ap);
-    let mut r: Vec<f32> = (0..n)
-        .map(|i| if unknown[i] { rhs[i] - ap[i] } else { 0.0 })
-        .collect();
+    let mut r: Vec<f32> = rhs.iter().zip(&ap).map(|(&b, &a)| b - a).collect();
     let bnorm = dot(&rhs, &rhs).sqrt().max(1e-30);
     let mut z: Vec<f32> = r.iter().zip(&deg).map(|(&a, &d)| a / d).collect();
     let mut p = z.clone();
@@ -275,15 +328,16 @@ fn walk(
             .zip(&z)
             .for_each(|(pi, &zi)| *pi = zi + beta_cg * *pi);
     }
-    Ok((0..n)
-        .map(|i| if unknown[i] { sol[i] } else { x[i] })
-        .collect())
+    for (&i, &v) in unk.iter().zip(&sol) {
+        x[i] = v;
+    }
+    Ok(x)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use interslice_core::Geometry;
+    use interslice_core::{Axis, Geometry};
 
     /// A tilted slab of bright voxels whose boundary the walker must follow
     /// between drawn slices 6 apart: the shape changes little, the image
