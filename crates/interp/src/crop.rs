@@ -102,7 +102,7 @@ pub struct DrawnSlice<'a> {
     pub index: usize,
     /// Pixels inside the traced outline.
     pub inside: &'a [bool],
-    /// Their in-plane extent ([`extent`] of `inside`), known to the caller
+    /// Their in-plane extent (`extent` of `inside`: `[u_lo, u_hi, v_lo, v_hi]`), known to the caller
     /// that read the slice, so the box does not scan every slice again.
     pub extent: Option<[usize; 4]>,
 }

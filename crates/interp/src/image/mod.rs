@@ -84,6 +84,15 @@ pub const RHO: f64 = 0.75;
 /// do not, where the walk would lose 0.017 one slice from a drawn one.
 pub const WALK_RHO: f64 = 0.8;
 
+/// The largest box, in voxels, the walk of [`Plan::walk`] is tried on: its
+/// memory ([`walk::BYTES_PER_VOXEL`] a voxel, 400 MB here) bounds what one
+/// interpolation may hold on a server many tracers share. A label whose
+/// drawn outlines span more (a whole 512³ cell) keeps the fusion.
+pub const MAX_WALK_VOXELS: usize = 1 << 24;
+
+/// An interpolation and, when asked for, its confidence.
+type Run = (Mask, Option<Volume<f32>>);
+
 /// The `(w, λ)` grid searched by leave-one-out.
 pub const GRID: [(f32, f32); 8] = [
     (0.5, 0.0),
@@ -374,10 +383,8 @@ impl ImageGuided {
         let mut held_input = SparseMask::new(&sparse, input.axis, &kept);
         held_input.cancel = input.cancel;
         let prior = candidates()[plan.prior].interpolate(held_input)?;
-        let seeds = band_seeds(&prior, &held_input);
-        let Some(walked) =
-            RandomWalk::new(self.image.clone()).walk_with(&held_input, Some(&seeds))?
-        else {
+        let seeds = |s: usize| band_seeds(&prior, &held_input, s);
+        let Some(walked) = self.walker().walk_with(&held_input, Some(&seeds))? else {
             return Ok(());
         };
         let flat = IntensityModel::flat();
@@ -422,11 +429,7 @@ impl ImageGuided {
     }
 
     /// Interpolate with a plan; the confidence too when `confidence` is set.
-    fn run(
-        &self,
-        input: &SparseMask<'_>,
-        confidence: bool,
-    ) -> Result<(Mask, Option<Volume<f32>>), InterpError> {
+    fn run(&self, input: &SparseMask<'_>, confidence: bool) -> Result<Run, InterpError> {
         let plan = match &self.planned {
             Some((axis, drawn, plan)) if *axis == input.axis && drawn == input.drawn => {
                 plan.clone()
@@ -435,8 +438,10 @@ impl ImageGuided {
         };
         input.check_cancelled()?;
         let prior = candidates()[plan.prior].interpolate(*input)?;
-        if plan.walk {
-            return self.run_walk(input, &prior, &plan, confidence);
+        if plan.walk
+            && let Some(walked) = self.run_walk(input, &prior, &plan, confidence)?
+        {
+            return Ok(walked);
         }
         let Some(model) = plan.model.as_ref().filter(|_| plan.fuses()) else {
             let c = confidence.then(|| shape_confidence(&prior, input, plan.scale));
@@ -485,20 +490,28 @@ impl ImageGuided {
 }
 
 impl ImageGuided {
+    /// The walk of [`Plan::walk`], bounded by [`MAX_WALK_VOXELS`].
+    fn walker(&self) -> RandomWalk {
+        RandomWalk::within(self.image.clone(), MAX_WALK_VOXELS)
+    }
+
     /// The random walk on `input`, kept in the band of `prior` with its
     /// objects apart on every skipped slice ([`Plan::walk`]); the
-    /// confidence is the walk's probability of what it decided.
+    /// confidence is the walk's probability of what it decided. `None` when
+    /// the walk declines the box (larger than on the leave-one-out run).
     fn run_walk(
         &self,
         input: &SparseMask<'_>,
         prior: &Mask,
         plan: &Plan,
         confidence: bool,
-    ) -> Result<(Mask, Option<Volume<f32>>), InterpError> {
+    ) -> Result<Option<Run>, InterpError> {
         let plane = Plane::of(input);
         let drawn = input.drawn;
-        let seeds = band_seeds(prior, input);
-        let walked = RandomWalk::new(self.image.clone()).walk_with(input, Some(&seeds))?;
+        let seeds = |s: usize| band_seeds(prior, input, s);
+        let Some(walked) = self.walker().walk_with(input, Some(&seeds))? else {
+            return Ok(None);
+        };
         let n = input.mask.slice_count(input.axis);
         let slices: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
             .into_par_iter()
@@ -512,7 +525,7 @@ impl ImageGuided {
                 if !p.iter().any(|&x| x) {
                     return None;
                 }
-                let z = walked.as_ref()?.logit(s, &plane)?;
+                let z = walked.logit(s, &plane)?;
                 let phi = signed_distance(&p, &plane);
                 Some((separate(&phi, &z, &plane, band(&plane, delta)), z))
             })
@@ -528,7 +541,7 @@ impl ImageGuided {
             }
             c
         });
-        Ok((mask, conf))
+        Ok(Some((mask, conf)))
     }
 }
 
@@ -566,40 +579,36 @@ impl Interpolator for ImageGuided {
     }
 }
 
-/// Seeds for the walk of [`Plan::walk`] on every skipped slice of `input`
-/// between drawn ones: the `prior` (1 inside, 0 outside) farther than the
-/// fusion's band ([`band`]) from its boundary, NaN (the walk decides) in
-/// the band; a slice where the prior is empty is all outside. What the walk
-/// could decide past the band, [`separate`] would drop anyway.
-fn band_seeds(prior: &Mask, input: &SparseMask<'_>) -> Vec<Option<Vec<f32>>> {
+/// Seeds for the walk of [`Plan::walk`] on skipped slice `s` of `input`
+/// (`None` for a drawn slice or one outside the drawn range): the `prior`
+/// (1 inside, 0 outside) farther than the fusion's band ([`band`]) from its
+/// boundary, NaN (the walk decides) in the band; a slice where the prior is
+/// empty is all outside. What the walk could decide past the band,
+/// [`separate`] would drop anyway.
+fn band_seeds(prior: &Mask, input: &SparseMask<'_>, s: usize) -> Option<Vec<f32>> {
     let plane = Plane::of(input);
     let drawn = input.drawn;
-    (0..input.mask.slice_count(input.axis))
-        .into_par_iter()
-        .map(|s| {
-            let g = bracket(drawn, s)?;
-            let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
-            let p = prior.slice(input.axis, s).expect("slice in range");
-            if !p.iter().any(|&x| x) {
-                return Some(vec![0.0; plane.len()]);
-            }
-            let b = band(&plane, delta);
-            let phi = signed_distance(&p, &plane);
-            Some(
-                phi.iter()
-                    .map(|&d| {
-                        if d.abs() <= b {
-                            f32::NAN
-                        } else if d < 0.0 {
-                            1.0
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect(),
-            )
-        })
-        .collect()
+    let g = bracket(drawn, s)?;
+    let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
+    let p = prior.slice(input.axis, s).ok()?;
+    if !p.iter().any(|&x| x) {
+        return Some(vec![0.0; plane.len()]);
+    }
+    let b = band(&plane, delta);
+    let phi = signed_distance(&p, &plane);
+    Some(
+        phi.iter()
+            .map(|&d| {
+                if d.abs() <= b {
+                    f32::NAN
+                } else if d < 0.0 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+    )
 }
 
 /// An error unless `image` lies on the grid of `input`'s tracing (what

@@ -42,12 +42,29 @@ const MAX_ITER: usize = 2000;
 #[derive(Debug, Clone)]
 pub struct RandomWalk {
     image: Arc<Volume<f32>>,
+    /// Most voxels of a box the walk solves on ([`RandomWalk::walk_with`]).
+    max_voxels: usize,
 }
 
+/// Bytes the walk holds per voxel of its box (intensities, values, three
+/// edge weights, the place among the unknowns), at most.
+pub const BYTES_PER_VOXEL: usize = 24;
+
 impl RandomWalk {
-    /// The method on `image` (on the grid of the masks it is given).
+    /// The method on `image` (on the grid of the masks it is given), on a
+    /// box of any size (the benchmark's anchor).
     pub fn new(image: Arc<Volume<f32>>) -> RandomWalk {
-        RandomWalk { image }
+        RandomWalk {
+            image,
+            max_voxels: usize::MAX,
+        }
+    }
+
+    /// The walk that declines a box of more than `max_voxels` voxels
+    /// ([`RandomWalk::walk_with`] gives `None`): what a caller bounds the
+    /// memory of an optional walk by.
+    pub fn within(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
+        RandomWalk { image, max_voxels }
     }
 }
 
@@ -95,15 +112,18 @@ impl RandomWalk {
     }
 
     /// [`RandomWalk::walk`] with more seeds on the skipped slices:
-    /// `seeds[s]`, when given, holds slice `s` row-major, 1 (inside) or 0
-    /// (outside) where the value is known and NaN where the walk decides.
+    /// `seeds(s)`, when given and `Some`, holds slice `s` row-major, 1
+    /// (inside) or 0 (outside) where the value is known and NaN where the
+    /// walk decides (asked for one slice at a time, so only the box is
+    /// held). `None` as well when the box is larger than the walk's bound
+    /// ([`RandomWalk::within`]).
     /// Seeding all but a band around a shape prior leaves the walk a thin
     /// shell to solve, with seeds close to every unknown voxel: it runs in
     /// a fraction of the whole box's time ([`crate::image::ImageGuided`]).
     pub fn walk_with(
         &self,
         input: &SparseMask<'_>,
-        seeds: Option<&[Option<Vec<f32>>]>,
+        seeds: Option<&Seeds<'_>>,
     ) -> Result<Option<Walked>, InterpError> {
         input.validate()?;
         check_grid(&self.image, input)?;
@@ -116,10 +136,16 @@ impl RandomWalk {
         let Some(bx) = walk_box(&slices, &plane, drawn) else {
             return Ok(None);
         };
+        if bx.dims().iter().product::<usize>() > self.max_voxels {
+            return Ok(None);
+        }
         let p = walk(&self.image, &plane, &bx, (drawn, &slices), seeds, input)?;
         Ok(Some(Walked { bx, p }))
     }
 }
+
+/// Seeds of the walk on a skipped slice ([`RandomWalk::walk_with`]).
+pub type Seeds<'a> = dyn Fn(usize) -> Option<Vec<f32>> + Sync + 'a;
 
 /// The probability of "inside" the walk gave each voxel of its box.
 pub struct Walked {
@@ -169,7 +195,7 @@ fn walk(
     plane: &Plane,
     bx: &Box3,
     (drawn, slices): (&[usize], &[Vec<bool>]),
-    seeds: Option<&[Option<Vec<f32>>]>,
+    seeds: Option<&Seeds<'_>>,
     input: &SparseMask<'_>,
 ) -> Result<Vec<f32>, InterpError> {
     let axis = input.axis;
@@ -209,11 +235,27 @@ fn walk(
         put(d - bx.s.0, &|i| if s[i] { 1.0 } else { 0.0 });
     }
     if let Some(seeds) = seeds {
-        for k in 0..ns {
-            if let Some(Some(s)) = seeds.get(bx.s.0 + k)
-                && drawn.binary_search(&(bx.s.0 + k)).is_err()
-            {
-                put(k, &|i| s[i]);
+        // Each slice's seeds cut to the box, the slices in parallel.
+        let cut: Vec<Option<Vec<f32>>> = (0..ns)
+            .into_par_iter()
+            .map(|k| {
+                if drawn.binary_search(&(bx.s.0 + k)).is_ok() {
+                    return None;
+                }
+                let s = seeds(bx.s.0 + k)?;
+                Some(
+                    (0..nv)
+                        .flat_map(|v| {
+                            let row = bx.u.0 + plane.width * (bx.v.0 + v);
+                            s[row..row + nu].to_vec()
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        for (k, c) in cut.iter().enumerate() {
+            if let Some(c) = c {
+                x[nu * nv * k..nu * nv * (k + 1)].copy_from_slice(c);
             }
         }
     }
@@ -389,6 +431,19 @@ mod tests {
             let d = crate::protocol::dice_on(&out, &truth, axis, &skipped);
             assert!(d > 0.97, "{axis}: Dice {d}");
         }
+    }
+
+    #[test]
+    fn a_bounded_walk_declines_a_larger_box_and_solves_a_smaller_one() {
+        let (truth, img, drawn) = case(Axis::Z);
+        let sparse = crate::protocol::sparse_of(&truth, Axis::Z, &drawn);
+        let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+        let whole = RandomWalk::new(img.clone()).walk(&input).unwrap().unwrap();
+        let [nu, nv, ns] = whole.bx.dims();
+        let voxels = nu * nv * ns;
+        let bounded = |max| RandomWalk::within(img.clone(), max).walk(&input).unwrap();
+        assert!(bounded(voxels - 1).is_none());
+        assert_eq!(bounded(voxels).unwrap().p, whole.p);
     }
 
     #[test]
