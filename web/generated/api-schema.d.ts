@@ -608,8 +608,9 @@ export interface components {
             axis: string;
             /**
              * Format: float
-             * @description With `recommend`: the image weight leave-one-out chose (0: the image
-             *     did not help).
+             * @description With `recommend`: the weight of the image in the fusion leave-one-out
+             *     chose (0: the image did not help, or the recommended image-guided
+             *     method reads it by its random walk instead).
              */
             image_weight?: number | null;
             /**

@@ -38,7 +38,9 @@ export function methodNote(r: InterpResult | undefined, picked: string): string 
   if (picked || !r?.recommended_method) return "";
   const rec = r.recommended_method;
   const drawn = r.slices.filter((s) => s.drawn).length;
-  if (r.image_weight && r.image_weight > 0) return `${rec}: the image predicts your drawn slices better`;
+  // The server recommends the image-guided method exactly where it reads
+  // the image (its fusion, `image_weight` > 0, or its walk, weight 0).
+  if (rec === RECOMMENDED_FOR_EXPORT) return `${rec}: the image predicts your drawn slices better`;
   if (drawn < 3) return `${rec}: a third drawn slice lets the image be tested`;
   return `${rec}: the image did not help`;
 }

@@ -67,6 +67,10 @@ describe("method note", () => {
     const r = result(three, { method: "image-guided", recommended_method: "image-guided", image_weight: 2 });
     expect(methodNote(r, "")).toBe("image-guided: the image predicts your drawn slices better");
   });
+  it("says so too where the walk, not the fusion, reads the image (weight 0)", () => {
+    const r = result(three, { method: "image-guided", recommended_method: "image-guided", image_weight: 0 });
+    expect(methodNote(r, "")).toBe("image-guided: the image predicts your drawn slices better");
+  });
   it("says the shape is used because the image did not help", () => {
     const r = result(three, { recommended_method: "shape-auto", image_weight: 0 });
     expect(methodNote(r, "")).toBe("shape-auto: the image did not help");

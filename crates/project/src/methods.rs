@@ -50,7 +50,9 @@ pub struct Recommendation {
     /// the image, else the shape default ([`interslice_interp::DEFAULT_METHOD`]),
     /// which is then the image-guided result bit for bit and cheaper.
     pub method: &'static str,
-    /// The weight of the image that leave-one-out chose (0: shape only).
+    /// The weight of the image in the fusion that leave-one-out chose (0:
+    /// shape only, or the image read by the walk instead, `Plan::walk`;
+    /// `method` says whether the image is read).
     pub image_weight: f32,
     /// The method itself, ready to interpolate the tracing (the
     /// image-guided one keeps its plan, so leave-one-out runs once).

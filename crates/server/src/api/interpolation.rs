@@ -78,8 +78,9 @@ pub struct InterpolateAnswer {
     /// slices uses the cell's image, else the shape default.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recommended_method: Option<String>,
-    /// With `recommend`: the image weight leave-one-out chose (0: the image
-    /// did not help).
+    /// With `recommend`: the weight of the image in the fusion leave-one-out
+    /// chose (0: the image did not help, or the recommended image-guided
+    /// method reads it by its random walk instead).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub image_weight: Option<f32>,
 }
