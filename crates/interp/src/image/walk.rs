@@ -35,8 +35,10 @@ pub const MARGIN: usize = 8;
 const BETA: f32 = 130.0;
 /// Relative residual at which conjugate gradients stop.
 const TOL: f32 = 1e-3;
-/// At most this many iterations.
-const MAX_ITER: usize = 2000;
+/// At most this many iterations: a bound on the time of a walk whose
+/// residual stalls. On the development data the walk in a prior's band
+/// converges in at most 110 iterations and the whole-box anchor in 202.
+const MAX_ITER: usize = 500;
 
 /// The random walker seeded by the drawn slices, on one intensity volume.
 #[derive(Debug, Clone)]
