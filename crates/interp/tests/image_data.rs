@@ -10,12 +10,19 @@ use interslice_interp::protocol::score;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// The development data folder, or `None` (said on stderr) when the test
+/// runs without it.
+fn data_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("INTERSLICE_INTERP_DATA").map(PathBuf::from);
+    if dir.is_none() {
+        eprintln!("INTERSLICE_INTERP_DATA not set: run scripts/test-interp-data.sh");
+    }
+    dir
+}
+
 #[test]
 fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
-    let Some(dir) = std::env::var_os("INTERSLICE_INTERP_DATA").map(PathBuf::from) else {
-        eprintln!("INTERSLICE_INTERP_DATA not set: run scripts/test-interp-data.sh");
-        return;
-    };
+    let Some(dir) = data_dir() else { return };
     let sd = dir.join("stardist");
     let labels = interslice_io::read_labels(&sd.join("mask3d.tif")).expect("stardist mask3d.tif");
     let image = interslice_io::read_volume(&sd.join("img3d.tif")).expect("stardist img3d.tif");
@@ -55,10 +62,7 @@ fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
 /// shape or ahead.
 #[test]
 fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_better() {
-    let Some(dir) = std::env::var_os("INTERSLICE_INTERP_DATA").map(PathBuf::from) else {
-        eprintln!("INTERSLICE_INTERP_DATA not set: run scripts/test-interp-data.sh");
-        return;
-    };
+    let Some(dir) = data_dir() else { return };
     let itk = dir.join("itk");
     let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz")).expect("T1_kmeans");
     let image = interslice_io::read_volume(&itk.join("T1.nii.gz")).expect("T1");

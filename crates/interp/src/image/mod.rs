@@ -448,45 +448,63 @@ impl ImageGuided {
             return Ok((prior, c));
         };
         let plane = Plane::of(input);
-        let drawn = input.drawn;
-        let n = input.mask.slice_count(input.axis);
-        let fused: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
-            .into_par_iter()
-            .map(|s| {
-                if input.is_cancelled() {
-                    return None;
-                }
-                let g = bracket(drawn, s)?;
-                let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
-                let p = prior.slice(input.axis, s).expect("slice in range");
-                if !p.iter().any(|&x| x) {
-                    return None;
-                }
-                let phi = signed_distance(&p, &plane);
+        decide_slices(
+            input,
+            &prior,
+            (confidence, plan.scale),
+            |s, delta, phi| {
                 let img = self.image_slice(&self.image, input, s);
-                Some(fuse(
-                    &phi,
-                    &img,
-                    model,
-                    &plane,
-                    (plan.tau(delta), delta),
-                    plan.params,
-                ))
-            })
-            .collect();
-        let mask = assemble(input, |s| fused[s].as_ref().map(|f| f.0.clone()))?;
-        let conf = confidence.then(|| {
-            let mut c = shape_confidence(&mask, input, plan.scale);
-            for (s, f) in fused.iter().enumerate() {
-                if let Some((_, z)) = f {
-                    let v: Vec<f32> = z.iter().map(|&x| sigmoid(plan.scale * x.abs())).collect();
-                    c.set_slice(input.axis, s, &v).expect("slice in range");
-                }
-            }
-            c
-        });
-        Ok((mask, conf))
+                let t = (plan.tau(delta), delta);
+                Some(fuse(phi, &img, model, &plane, t, plan.params))
+            },
+            |z| sigmoid(plan.scale * z.abs()),
+        )
     }
+}
+
+/// Each skipped slice between drawn ones where the `prior` shows the label,
+/// decided by `decide(s, δ, φ)` (`δ` the distance to the nearest drawn
+/// slice, `φ` the prior's signed distance) into its mask and a logit, `None`
+/// to keep the prior empty there; the volume assembled and, when
+/// `confidence.0`, the confidence: `confidence_of(logit)` on those slices,
+/// the shape's (at scale `confidence.1`) elsewhere.
+fn decide_slices(
+    input: &SparseMask<'_>,
+    prior: &Mask,
+    confidence: (bool, f32),
+    decide: impl Fn(usize, f64, &[f32]) -> Option<(Vec<bool>, Vec<f32>)> + Sync,
+    confidence_of: impl Fn(f32) -> f32,
+) -> Result<Run, InterpError> {
+    let plane = Plane::of(input);
+    let drawn = input.drawn;
+    let n = input.mask.slice_count(input.axis);
+    let decided: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
+        .into_par_iter()
+        .map(|s| {
+            if input.is_cancelled() {
+                return None;
+            }
+            let g = bracket(drawn, s)?;
+            let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
+            let p = prior.slice(input.axis, s).expect("slice in range");
+            if !p.iter().any(|&x| x) {
+                return None;
+            }
+            decide(s, delta, &signed_distance(&p, &plane))
+        })
+        .collect();
+    let mask = assemble(input, |s| decided[s].as_ref().map(|f| f.0.clone()))?;
+    let conf = confidence.0.then(|| {
+        let mut c = shape_confidence(&mask, input, confidence.1);
+        for (s, f) in decided.iter().enumerate() {
+            if let Some((_, z)) = f {
+                let v: Vec<f32> = z.iter().map(|&x| confidence_of(x)).collect();
+                c.set_slice(input.axis, s, &v).expect("slice in range");
+            }
+        }
+        c
+    });
+    Ok((mask, conf))
 }
 
 impl ImageGuided {
@@ -507,41 +525,21 @@ impl ImageGuided {
         confidence: bool,
     ) -> Result<Option<Run>, InterpError> {
         let plane = Plane::of(input);
-        let drawn = input.drawn;
         let seeds = |s: usize| band_seeds(prior, input, s);
         let Some(walked) = self.walker().walk_with(input, Some(&seeds))? else {
             return Ok(None);
         };
-        let n = input.mask.slice_count(input.axis);
-        let slices: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
-            .into_par_iter()
-            .map(|s| {
-                if input.is_cancelled() {
-                    return None;
-                }
-                let g = bracket(drawn, s)?;
-                let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
-                let p = prior.slice(input.axis, s).expect("slice in range");
-                if !p.iter().any(|&x| x) {
-                    return None;
-                }
+        decide_slices(
+            input,
+            prior,
+            (confidence, plan.scale),
+            |s, delta, phi| {
                 let z = walked.logit(s, &plane)?;
-                let phi = signed_distance(&p, &plane);
-                Some((separate(&phi, &z, &plane, band(&plane, delta)), z))
-            })
-            .collect();
-        let mask = assemble(input, |s| slices[s].as_ref().map(|f| f.0.clone()))?;
-        let conf = confidence.then(|| {
-            let mut c = shape_confidence(&mask, input, plan.scale);
-            for (s, f) in slices.iter().enumerate() {
-                if let Some((_, z)) = f {
-                    let v: Vec<f32> = z.iter().map(|&x| 0.5 + x.abs().min(0.5)).collect();
-                    c.set_slice(input.axis, s, &v).expect("slice in range");
-                }
-            }
-            c
-        });
-        Ok(Some((mask, conf)))
+                Some((separate(phi, &z, &plane, band(&plane, delta)), z))
+            },
+            |z| 0.5 + z.abs().min(0.5),
+        )
+        .map(Some)
     }
 }
 
