@@ -57,6 +57,7 @@ def interpolate(
     spacing: Sequence[float] = (1.0, 1.0, 1.0),
     image: npt.NDArray[Any] | None = None,
     method: str | None = None,
+    max_labels: int = 255,
 ) -> npt.NDArray[Any]: ...
 def methods() -> list[MethodInfo]: ...
 def advise(
@@ -67,6 +68,7 @@ def advise(
     image: npt.NDArray[Any] | None = None,
     method: str | None = None,
     count: int = 5,
+    max_labels: int = 255,
 ) -> dict[str, Any]: ...
 def threshold(
     image: npt.NDArray[Any],

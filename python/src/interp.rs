@@ -7,6 +7,7 @@ use crate::metrics::spacing3;
 use crate::volumes::geometry;
 use crate::{error, parse_axis};
 use interslice_core::{Axis, LabelVolume, LengthUnit, Volume, Voxel};
+use interslice_interp::labels::{DEFAULT_MAX_LABELS, drawn_labels};
 use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interpolate_labels_as};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
@@ -24,11 +25,14 @@ use std::sync::Arc;
 /// interpolated on its own and painted in ascending order. `spacing` is
 /// `(sx, sy, sz)`; `method` names one of `methods()` (default: the best
 /// measured one; with `image`, the image-aware one). `image` is the
-/// intensity array on the same grid (any numeric dtype). Returns a new Fortran-ordered array of the input's
+/// intensity array on the same grid (any numeric dtype). More than
+/// `max_labels` labels on the drawn slices is an error (each label is
+/// interpolated on its own: an intensity array passed as labels would run
+/// for minutes). Returns a new Fortran-ordered array of the input's
 /// dtype; the drawn slices are reproduced exactly. The GIL is released
 /// while the interpolation runs.
 #[pyfunction]
-#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None))]
+#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, max_labels=DEFAULT_MAX_LABELS))]
 #[allow(clippy::too_many_arguments)]
 pub fn interpolate<'py>(
     py: Python<'py>,
@@ -38,10 +42,12 @@ pub fn interpolate<'py>(
     spacing: Vec<f64>,
     image: Option<&Bound<'py, PyAny>>,
     method: Option<&str>,
+    max_labels: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let a = any_array(labels, "labels")?;
     let dims = a.shape();
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
+    t.check_labels(max_labels)?;
     with_array!(&a, x => interpolated_like(py, x, &t, dims))
 }
 
@@ -70,7 +76,7 @@ fn interpolated_like<'py, T: Element + FromLabel + Voxel>(
 /// `interpolate` (the advice is for the interpolation `method` and `image`
 /// would give). The GIL is released while it runs.
 #[pyfunction]
-#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, count=5))]
+#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, count=5, max_labels=DEFAULT_MAX_LABELS))]
 #[allow(clippy::too_many_arguments)]
 pub fn advise<'py>(
     py: Python<'py>,
@@ -81,12 +87,14 @@ pub fn advise<'py>(
     image: Option<&Bound<'py, PyAny>>,
     method: Option<&str>,
     count: usize,
+    max_labels: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     if !(1..=1000).contains(&count) {
         return Err(error(format!("count must be 1..=1000, got {count}")));
     }
     let a = any_array(labels, "labels")?;
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
+    t.check_labels(max_labels)?;
     let advice = py
         .detach(|| {
             interslice_interp::advise::advise(
@@ -113,6 +121,19 @@ struct Tracing {
 }
 
 impl Tracing {
+    /// An error when more than `max` labels are drawn (the CLI's
+    /// `--max-labels`, in the same words).
+    fn check_labels(&self, max: usize) -> PyResult<()> {
+        let n = drawn_labels(&self.sparse, self.axis, &self.drawn).len();
+        if n > max {
+            return Err(error(format!(
+                "labels has {n} labels on its drawn slices, more than max_labels {max} \
+                 (is it an intensity image? pass max_labels={n} to interpolate every one)"
+            )));
+        }
+        Ok(())
+    }
+
     fn of<'py>(
         py: Python<'py>,
         a: &AnyArray<'py>,

@@ -104,3 +104,22 @@ def test_other_errors():
         interslice.write("x.nii", a.astype(np.int64))
     with pytest.raises(interslice.Error, match="phantom size"):
         interslice.phantom(size=8)
+
+
+def test_an_intensity_array_passed_as_labels_is_refused_before_any_work():
+    rng = np.random.default_rng(1)
+    noise = np.zeros((16, 16, 11), np.uint16)
+    noise[:, :, ::5] = rng.integers(1, 60000, size=(16, 16, 3))
+    for call in (interslice.interpolate, interslice.advise):
+        with pytest.raises(interslice.Error) as e:
+            call(noise, drawn=[0, 5, 10])
+        text = one_line(e)
+        assert "more than max_labels 255" in text and "is it an intensity image?" in text
+    # Asked for, every label is interpolated.
+    two = np.zeros((8, 8, 11), np.uint16)
+    two[2:5, 2:5, ::5] = 300
+    two[5:7, 5:7, ::5] = 301
+    out = interslice.interpolate(two, drawn=[0, 5, 10], max_labels=2)
+    assert set(np.unique(out)) == {0, 300, 301}
+    with pytest.raises(interslice.Error):
+        interslice.interpolate(two, drawn=[0, 5, 10], max_labels=1)

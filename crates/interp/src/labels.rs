@@ -19,6 +19,12 @@ use interslice_core::regions::whole_structure;
 use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
+/// Most labels a caller interpolates unless told otherwise: every label an
+/// 8-bit label volume can hold. Each label is interpolated on its own, so an
+/// intensity image read as labels would run for minutes; the CLI's
+/// `--max-labels` and Python's `max_labels` default to this.
+pub const DEFAULT_MAX_LABELS: usize = 255;
+
 /// Interpolate every label of `sparse` from its drawn slices along `axis`.
 ///
 /// `drawn` lists the drawn slice indices (any order, duplicates allowed); a
@@ -94,11 +100,11 @@ fn run<T: Voxel>(
                 let slices: Vec<DrawnSlice<'_>> = drawn
                     .iter()
                     .zip(&filled)
-                    .zip(&planes.extents)
-                    .map(|((&index, inside), e)| DrawnSlice {
+                    .enumerate()
+                    .map(|(i, (&index, inside))| DrawnSlice {
                         index,
                         inside,
-                        extent: e[li],
+                        extent: planes.extent(i, li),
                     })
                     .collect();
                 let dims = sparse.geometry().dims;
@@ -170,7 +176,39 @@ pub fn sorted_drawn(
 /// interpolating a volume that may be an intensity image). `drawn` must be
 /// valid indices along `axis`.
 pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u16> {
-    Planes::read(sparse, axis, drawn).labels
+    let planes = read_planes(sparse, axis, drawn);
+    labels_on(&planes)
+}
+
+/// The drawn slices of `sparse` along `axis`, row-major.
+fn read_planes(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<Vec<u16>> {
+    drawn
+        .par_iter()
+        .map(|&d| sparse.slice(axis, d).expect("validated drawn index"))
+        .collect()
+}
+
+/// The labels on any of `planes`, ascending.
+fn labels_on(planes: &[Vec<u16>]) -> Vec<u16> {
+    // Which values occur, per slice in parallel (a plain store per pixel:
+    // setting bits would chain every pixel through one word).
+    let seen = planes
+        .par_iter()
+        .fold(
+            || vec![false; 65536],
+            |mut seen, p| {
+                p.iter().for_each(|&v| seen[v as usize] = true);
+                seen
+            },
+        )
+        .reduce(
+            || vec![false; 65536],
+            |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x |= y);
+                a
+            },
+        );
+    (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect()
 }
 
 /// The drawn slices of a label volume, read once for all labels: each
@@ -185,37 +223,18 @@ struct Planes {
     planes: Vec<Vec<u16>>,
     /// Labels on any drawn slice, ascending.
     labels: Vec<u16>,
-    /// Per drawn slice, per label (as indexed in `labels`): its extent
-    /// `[u_lo, u_hi, v_lo, v_hi]`, as [`crate::crop`] measures outlines.
-    extents: Vec<Vec<Option<[usize; 4]>>>,
+    /// Per drawn slice, the labels on it (as indexed in `labels`,
+    /// ascending) with their extent `[u_lo, u_hi, v_lo, v_hi]`, as
+    /// [`crate::crop`] measures outlines: only the labels present, so the
+    /// memory is bounded by the slices' pixels whatever the label count.
+    extents: Vec<Vec<(usize, [usize; 4])>>,
 }
 
 impl Planes {
     fn read(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Planes {
         let (w, h) = sparse.slice_shape(axis);
-        let planes: Vec<Vec<u16>> = drawn
-            .par_iter()
-            .map(|&d| sparse.slice(axis, d).expect("validated drawn index"))
-            .collect();
-        // Which values occur, per slice in parallel (a plain store per
-        // pixel: setting bits would chain every pixel through one word).
-        let seen = planes
-            .par_iter()
-            .fold(
-                || vec![false; 65536],
-                |mut seen, p| {
-                    p.iter().for_each(|&v| seen[v as usize] = true);
-                    seen
-                },
-            )
-            .reduce(
-                || vec![false; 65536],
-                |mut a, b| {
-                    a.iter_mut().zip(&b).for_each(|(x, y)| *x |= y);
-                    a
-                },
-            );
-        let labels: Vec<u16> = (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect();
+        let planes = read_planes(sparse, axis, drawn);
+        let labels = labels_on(&planes);
         let mut index = vec![u32::MAX; 65536];
         for (i, &l) in labels.iter().enumerate() {
             index[l as usize] = i as u32;
@@ -230,7 +249,10 @@ impl Planes {
                         *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
                     }
                 }
-                e
+                e.into_iter()
+                    .enumerate()
+                    .filter_map(|(i, x)| Some((i, x?)))
+                    .collect()
             })
             .collect();
         Planes {
@@ -240,6 +262,12 @@ impl Planes {
             labels,
             extents,
         }
+    }
+
+    /// The extent of label `li` on drawn slice `i`, `None` when absent.
+    fn extent(&self, i: usize, li: usize) -> Option<[usize; 4]> {
+        let e = &self.extents[i];
+        e.binary_search_by_key(&li, |x| x.0).ok().map(|k| e[k].1)
     }
 
     /// The whole structure of label `li` on each drawn slice
@@ -252,10 +280,10 @@ impl Planes {
         let (w, h) = (self.w, self.h);
         self.planes
             .par_iter()
-            .zip(&self.extents)
-            .map(|(p, e)| {
+            .enumerate()
+            .map(|(i, p)| {
                 let mut out = vec![false; w * h];
-                let Some([u0, u1, v0, v1]) = e[li] else {
+                let Some([u0, u1, v0, v1]) = self.extent(i, li) else {
                     return out;
                 };
                 let (u0, v0) = (u0.saturating_sub(1), v0.saturating_sub(1));

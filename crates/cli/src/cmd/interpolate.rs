@@ -122,8 +122,8 @@ impl TracingArgs {
     }
 }
 
-/// Default of `--max-labels`: every label an 8-bit label volume can hold.
-pub const DEFAULT_MAX_LABELS: usize = 255;
+/// Default of `--max-labels` ([`interslice_interp::labels::DEFAULT_MAX_LABELS`]).
+pub use interslice_interp::labels::DEFAULT_MAX_LABELS;
 
 /// Run `interpolate`.
 pub fn run(a: Args) -> Result<()> {
