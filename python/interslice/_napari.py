@@ -34,6 +34,10 @@ METRIC_ROWS = [
     ("NSD", "nsd"),
 ]
 
+#: Every label a Labels layer can hold (interslice's own bound is for files
+#: and arrays that may be intensities read as labels).
+ALL_LABELS = 65535
+
 
 def phantom_cell():
     """Sample data: the 128³ phantom cell (0.35 µm voxels) and its exact
@@ -192,6 +196,8 @@ class InterpolateWidget(Container):
             spacing=spacing,
             image=img,
             method=self.method_combo.value,
+            # A Labels layer holds labels, not intensities: every one counts.
+            max_labels=ALL_LABELS,
         ).T
         undrawn = [i for i in range(n) if i not in drawn]
         if undrawn:
@@ -205,7 +211,9 @@ class InterpolateWidget(Container):
 
     def _suggest(self, layer, sparse, drawn, axis, spacing, img) -> None:
         """Show the next slice worth painting, when interslice can advise."""
-        advice = interslice.advise(sparse.T, drawn=drawn, axis=2 - axis, spacing=spacing, image=img, count=1)
+        advice = interslice.advise(
+            sparse.T, drawn=drawn, axis=2 - axis, spacing=spacing, image=img, count=1, max_labels=ALL_LABELS
+        )
         best = advice["suggestions"]
         if not best:
             self.suggestion_label.value = ""
