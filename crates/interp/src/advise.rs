@@ -40,7 +40,7 @@
 //! labels' rates, `V` the sum of their volumes. The N best slices are chosen
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
-use crate::labels::{drawn_labels, sorted_drawn, traced_mask};
+use crate::labels::{DrawnLabels, sorted_drawn};
 use crate::loo::Compact;
 use crate::predict::{LeaveOneOut, estimate, held_out_errors};
 use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
@@ -241,13 +241,11 @@ pub fn advise(
             drawn.len()
         )));
     }
-    let labels = drawn_labels(sparse, axis, &drawn);
-    let per_label: Vec<(Vec<f64>, f64, Option<LeaveOneOut>)> = labels
+    let traced = DrawnLabels::read(sparse, axis, &drawn);
+    let per_label: Vec<(Vec<f64>, f64, Option<LeaveOneOut>)> = traced
+        .labels()
         .par_iter()
-        .map(|&l| {
-            let m = traced_mask(sparse, axis, &drawn, l);
-            label_rates(&m, axis, &drawn, method)
-        })
+        .map(|&l| label_rates(&traced.traced_mask(l), axis, &drawn, method))
         .collect::<Result<_, _>>()?;
     let volume: f64 = per_label.iter().map(|(_, v, _)| v).sum();
     let gaps: Vec<Gap> = drawn

@@ -11,7 +11,7 @@
 use crate::SparseMask;
 use crate::image::fuse::tau;
 use crate::sdf::signed_distance;
-use crate::slices::{Plane, bracket};
+use crate::slices::{Plane, to_nearest_drawn};
 use interslice_core::{Mask, Volume};
 use rayon::prelude::*;
 
@@ -28,8 +28,7 @@ pub fn shape_confidence(mask: &Mask, input: &SparseMask<'_>, scale: f32) -> Volu
     let slices: Vec<Option<Vec<f32>>> = (0..n)
         .into_par_iter()
         .map(|s| {
-            let g = bracket(drawn, s)?;
-            let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
+            let delta = to_nearest_drawn(drawn, s)?;
             let m = mask.slice(input.axis, s).expect("slice in range");
             if !m.iter().any(|&x| x) {
                 // Nothing on the slice between two drawn slices: as sure as

@@ -63,11 +63,16 @@ pub struct LabelBox {
 pub(crate) fn extent(inside: &[bool], w: usize) -> Option<[usize; 4]> {
     let mut e: Option<[usize; 4]> = None;
     for (p, _) in inside.iter().enumerate().filter(|(_, x)| **x) {
-        let (u, v) = (p % w, p / w);
-        let x = e.get_or_insert([u, u, v, v]);
-        *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
+        grow_extent(&mut e, p % w, p / w);
     }
     e
+}
+
+/// Grow extent `e` to hold pixel `(u, v)`.
+#[inline]
+pub(crate) fn grow_extent(e: &mut Option<[usize; 4]>, u: usize, v: usize) {
+    let x = e.get_or_insert([u, u, v, v]);
+    *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
 }
 
 /// The extent holding every one of `extents`; `None` when there are none.

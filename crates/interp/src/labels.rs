@@ -12,7 +12,7 @@
 //! A method that reads no further than its tracing's surroundings
 //! ([`Interpolator::box_reach`]) runs on the label's box only
 //! ([`crate::crop`]).
-use crate::crop::{DrawnSlice, LabelBox};
+use crate::crop::{DrawnSlice, LabelBox, grow_extent};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
@@ -90,7 +90,7 @@ fn run<T: Voxel>(
             drawn.len()
         )));
     }
-    let planes = Planes::read(sparse, axis, &drawn);
+    let planes = DrawnLabels::read(sparse, axis, &drawn);
     let labels = &planes.labels;
     let results: Vec<LabelResult> = (0..labels.len())
         .into_par_iter()
@@ -114,7 +114,7 @@ fn run<T: Voxel>(
                     return Ok((Piece::Boxed(b, m), None));
                 }
             }
-            let m = mask_of_slices(sparse, axis, &drawn, &filled);
+            let m = planes.mask_of(&filled);
             let input = SparseMask::new(&m, axis, &drawn);
             if confidence {
                 let (mask, c) = method.interpolate_with_confidence(input)?;
@@ -215,7 +215,11 @@ fn labels_on(planes: &[Vec<u16>]) -> Vec<u16> {
 /// slice's labels and, per label, its in-plane extent there. A label's
 /// traced slices are then worked out on its extent only, so the cost of many
 /// labels is their outlines', not the slices' times their number.
-struct Planes {
+pub struct DrawnLabels {
+    /// The grid of the label volume, its axis and its drawn slices.
+    geometry: Geometry,
+    axis: Axis,
+    drawn: Vec<usize>,
     /// Slice width and height.
     w: usize,
     h: usize,
@@ -230,8 +234,9 @@ struct Planes {
     extents: Vec<Vec<(usize, [usize; 4])>>,
 }
 
-impl Planes {
-    fn read(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Planes {
+impl DrawnLabels {
+    /// Read the drawn slices of `sparse` along `axis` (valid indices).
+    pub fn read(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> DrawnLabels {
         let (w, h) = sparse.slice_shape(axis);
         let planes = read_planes(sparse, axis, drawn);
         let labels = labels_on(&planes);
@@ -245,8 +250,7 @@ impl Planes {
                 let mut e: Vec<Option<[usize; 4]>> = vec![None; labels.len()];
                 for (v, row) in p.chunks_exact(w).enumerate() {
                     for (u, &l) in row.iter().enumerate().filter(|(_, l)| **l != 0) {
-                        let x = e[index[l as usize] as usize].get_or_insert([u, u, v, v]);
-                        *x = [x[0].min(u), x[1].max(u), x[2].min(v), x[3].max(v)];
+                        grow_extent(&mut e[index[l as usize] as usize], u, v);
                     }
                 }
                 e.into_iter()
@@ -255,13 +259,42 @@ impl Planes {
                     .collect()
             })
             .collect();
-        Planes {
+        DrawnLabels {
+            geometry: sparse.geometry().clone(),
+            axis,
+            drawn: drawn.to_vec(),
             w,
             h,
             planes,
             labels,
             extents,
         }
+    }
+
+    /// The labels on any drawn slice, ascending.
+    pub fn labels(&self) -> &[u16] {
+        &self.labels
+    }
+
+    /// The traced mask of `label` on the drawn slices (other slices empty):
+    /// the whole structure of the label on each, as a 2D image with
+    /// 8-connected holes ([`whole_structure`]); empty when the label is on
+    /// no drawn slice.
+    pub fn traced_mask(&self, label: u16) -> Mask {
+        let filled = match self.labels.binary_search(&label) {
+            Ok(li) => self.traced(li),
+            Err(_) => vec![vec![false; self.w * self.h]; self.drawn.len()],
+        };
+        self.mask_of(&filled)
+    }
+
+    /// A mask of the volume's grid holding `filled` on the drawn slices.
+    fn mask_of(&self, filled: &[Vec<bool>]) -> Mask {
+        let mut m: Mask = Volume::zeros(self.geometry.clone());
+        for (&d, f) in self.drawn.iter().zip(filled) {
+            m.set_slice(self.axis, d, f).expect("slice shape matches");
+        }
+        m
     }
 
     /// The extent of label `li` on drawn slice `i`, `None` when absent.
@@ -308,40 +341,6 @@ impl Planes {
     }
 }
 
-/// The traced mask of `label` on the drawn slices (other slices empty): the
-/// whole structure of the label on each, as a 2D image with 8-connected
-/// holes ([`interslice_core::regions::whole_structure`]).
-pub fn traced_mask(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Mask {
-    mask_of_slices(
-        sparse,
-        axis,
-        drawn,
-        &traced_slices(sparse, axis, drawn, label),
-    )
-}
-
-/// The whole structure of `label` on each drawn slice, row-major as
-/// [`Volume::slice`] gives it (empty slices when the label is on none).
-fn traced_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], label: u16) -> Vec<Vec<bool>> {
-    let planes = Planes::read(sparse, axis, drawn);
-    match planes.labels.binary_search(&label) {
-        Ok(li) => planes.traced(li),
-        Err(_) => {
-            let (w, h) = sparse.slice_shape(axis);
-            vec![vec![false; w * h]; drawn.len()]
-        }
-    }
-}
-
-/// A mask of `sparse`'s grid holding `filled` on the drawn slices.
-fn mask_of_slices(sparse: &LabelVolume, axis: Axis, drawn: &[usize], filled: &[Vec<bool>]) -> Mask {
-    let mut m: Mask = Volume::zeros(sparse.geometry().clone());
-    for (&d, f) in drawn.iter().zip(filled) {
-        m.set_slice(axis, d, f).expect("slice shape matches");
-    }
-    m
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -362,7 +361,7 @@ mod tests {
             let g = Geometry::new([w, h, 2], [1.0; 3], Default::default()).unwrap();
             let data: Vec<u16> = seed[..w * h * 2].to_vec();
             let vol = Volume::from_vec(g, data).unwrap();
-            let planes = Planes::read(&vol, Axis::Z, &[0, 1]);
+            let planes = DrawnLabels::read(&vol, Axis::Z, &[0, 1]);
             for (li, &l) in planes.labels.iter().enumerate() {
                 let traced = planes.traced(li);
                 for (k, got) in traced.iter().enumerate() {

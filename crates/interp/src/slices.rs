@@ -142,3 +142,11 @@ pub fn bracket(drawn: &[usize], s: usize) -> Option<usize> {
     }
     Some(p - 1)
 }
+
+/// Slices from skipped slice `s` to the nearest drawn slice (`δ`, what
+/// the confidence and the image fusion scale with), or `None` where
+/// [`bracket`] is.
+pub fn to_nearest_drawn(drawn: &[usize], s: usize) -> Option<f64> {
+    let g = bracket(drawn, s)?;
+    Some((s - drawn[g]).min(drawn[g + 1] - s) as f64)
+}

@@ -19,7 +19,7 @@
 use anyhow::{Context, Result, bail};
 use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, LabelVolume, Mask};
-use interslice_interp::labels::traced_mask;
+use interslice_interp::labels::DrawnLabels;
 use interslice_interp::mesh::mask_surface;
 use interslice_interp::{SparseMask, by_name};
 use interslice_io::mesh::{MeshFormat, world_transform, write_mesh_as};
@@ -113,28 +113,22 @@ fn method_surface(
 ) -> Result<TriMesh> {
     let method = by_name(name)?;
     let drawn = super::interpolate::drawn_slices(labels, a.axis, a.drawn.as_deref())?;
-    let mut present = vec![false; 65536];
-    for &d in &drawn {
-        for v in labels.slice(a.axis, d)? {
-            present[usize::from(v)] = true;
-        }
-    }
+    let drawn_labels = DrawnLabels::read(labels, a.axis, &drawn);
+    let present = drawn_labels.labels();
     let wanted: Vec<u16> = match label {
-        Some(l) if present[usize::from(l)] && l != 0 => vec![l],
+        Some(l) if present.binary_search(&l).is_ok() => vec![l],
         Some(l) => bail!(
             "label {l} does not occur on the drawn slices along {}",
             a.axis
         ),
-        None => (1..=u16::MAX)
-            .filter(|&l| present[usize::from(l)])
-            .collect(),
+        None => present.to_vec(),
     };
     if wanted.is_empty() {
         bail!("the drawn slices along {} hold no label", a.axis);
     }
     let mut out = TriMesh::new();
     for l in wanted {
-        let traced = traced_mask(labels, a.axis, &drawn, l);
+        let traced = drawn_labels.traced_mask(l);
         let input = SparseMask::new(&traced, a.axis, &drawn);
         let m = match method.surface_mesh(input) {
             Ok(Some(m)) => Ok(m),

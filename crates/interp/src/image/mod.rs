@@ -45,7 +45,7 @@ use crate::auto::{Choice, ShapeAuto, candidates};
 use crate::confidence::{shape_confidence, sigmoid};
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
-use crate::slices::{Plane, assemble, bracket};
+use crate::slices::{Plane, assemble, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
 use fuse::{Params, band, fuse, separate};
 use interslice_core::{AnyVolume, Axis, Mask, Volume};
@@ -484,8 +484,7 @@ fn decide_slices(
             if input.is_cancelled() {
                 return None;
             }
-            let g = bracket(drawn, s)?;
-            let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
+            let delta = to_nearest_drawn(drawn, s)?;
             let p = prior.slice(input.axis, s).expect("slice in range");
             if !p.iter().any(|&x| x) {
                 return None;
@@ -585,9 +584,7 @@ impl Interpolator for ImageGuided {
 /// [`separate`] would drop anyway.
 fn band_seeds(prior: &Mask, input: &SparseMask<'_>, s: usize) -> Option<Vec<f32>> {
     let plane = Plane::of(input);
-    let drawn = input.drawn;
-    let g = bracket(drawn, s)?;
-    let delta = (s - drawn[g]).min(drawn[g + 1] - s) as f64;
+    let delta = to_nearest_drawn(input.drawn, s)?;
     let p = prior.slice(input.axis, s).ok()?;
     if !p.iter().any(|&x| x) {
         return Some(vec![0.0; plane.len()]);

@@ -85,6 +85,18 @@ impl Box3 {
             self.s.1 - self.s.0,
         ]
     }
+
+    /// The box's part of a whole slice `width` pixels wide (row-major),
+    /// `u` fastest.
+    fn cut<T: Copy>(&self, slice: &[T], width: usize) -> Vec<T> {
+        (self.v.0..self.v.1)
+            .flat_map(|v| {
+                slice[self.u.0 + width * v..self.u.1 + width * v]
+                    .iter()
+                    .copied()
+            })
+            .collect()
+    }
 }
 
 impl Interpolator for RandomWalk {
@@ -203,16 +215,11 @@ fn walk(
     let axis = input.axis;
     let [nu, nv, ns] = bx.dims();
     let n = nu * nv * ns;
-    let idx = |u: usize, v: usize, k: usize| u + nu * (v + nv * k);
+    let area = nu * nv;
     // Intensities of the box, standardised.
-    let mut img = vec![0f32; n];
+    let mut img = Vec::with_capacity(n);
     for k in 0..ns {
-        let sl = image.slice(axis, bx.s.0 + k)?;
-        for v in 0..nv {
-            for u in 0..nu {
-                img[idx(u, v, k)] = sl[(bx.u.0 + u) + plane.width * (bx.v.0 + v)];
-            }
-        }
+        img.extend(bx.cut(&image.slice(axis, bx.s.0 + k)?, plane.width));
     }
     let mean = img.iter().map(|&x| f64::from(x)).sum::<f64>() / n as f64;
     let var = img
@@ -226,38 +233,29 @@ fn walk(
     // Seeds: 1 inside, 0 outside on drawn slices (and where `seeds` say);
     // NaN = unknown.
     let mut x = vec![f32::NAN; n];
-    let mut put = |k: usize, plane_values: &dyn Fn(usize) -> f32| {
-        for v in 0..nv {
-            for u in 0..nu {
-                x[idx(u, v, k)] = plane_values((bx.u.0 + u) + plane.width * (bx.v.0 + v));
-            }
-        }
-    };
     for (&d, s) in drawn.iter().zip(slices) {
-        put(d - bx.s.0, &|i| if s[i] { 1.0 } else { 0.0 });
+        let k = d - bx.s.0;
+        for (o, inside) in x[area * k..area * (k + 1)]
+            .iter_mut()
+            .zip(bx.cut(s, plane.width))
+        {
+            *o = if inside { 1.0 } else { 0.0 };
+        }
     }
     if let Some(seeds) = seeds {
-        // Each slice's seeds cut to the box, the slices in parallel.
+        // Each skipped slice's seeds cut to the box, the slices in parallel.
         let cut: Vec<Option<Vec<f32>>> = (0..ns)
             .into_par_iter()
             .map(|k| {
                 if drawn.binary_search(&(bx.s.0 + k)).is_ok() {
                     return None;
                 }
-                let s = seeds(bx.s.0 + k)?;
-                Some(
-                    (0..nv)
-                        .flat_map(|v| {
-                            let row = bx.u.0 + plane.width * (bx.v.0 + v);
-                            s[row..row + nu].to_vec()
-                        })
-                        .collect(),
-                )
+                Some(bx.cut(&seeds(bx.s.0 + k)?, plane.width))
             })
             .collect();
         for (k, c) in cut.iter().enumerate() {
             if let Some(c) = c {
-                x[nu * nv * k..nu * nv * (k + 1)].copy_from_slice(c);
+                x[area * k..area * (k + 1)].copy_from_slice(c);
             }
         }
     }
