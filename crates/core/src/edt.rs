@@ -1,20 +1,21 @@
 //! Exact squared Euclidean distance transform (EDT) on anisotropic grids.
 //!
-//! The transform is separable: a first pass along x finds, in every row, the
-//! distance to the nearest feature pixel of that row; each further pass (y, then z)
-//! takes the lower envelope of parabolas `s²·(p − q)² + f(q)` along its lines,
-//! which is the algorithm of Felzenszwalb & Huttenlocher, "Distance Transforms of
-//! Sampled Functions" (Theory of Computing, 2012). The result is exact: every value
-//! is `Σ (s_a · Δ_a)²` for the nearest feature pixel, not an approximation such as
-//! a chamfer distance.
+//! The transform is separable: one pass finds, along every line of one axis,
+//! the distance to the nearest feature pixel of that line; each further pass
+//! takes the lower envelope of parabolas `s²·(p − q)² + f(q)` along the lines
+//! of the next axis, which is the algorithm of Felzenszwalb & Huttenlocher,
+//! "Distance Transforms of Sampled Functions" (Theory of Computing, 2012). The
+//! result is exact: every value is `Σ (s_a · Δ_a)²` for the nearest feature
+//! pixel, not an approximation such as a chamfer distance.
 //!
 //! Written here rather than taken from a crate because no maintained Rust crate
 //! offers an exact, anisotropic, parallel 3D transform; the algorithm is short and
 //! is checked against brute force by property tests.
 //!
-//! Every pass runs in parallel over lines with rayon. Lines that are strided in
-//! memory (y and z) are processed in blocks of adjacent columns so that reads and
-//! writes touch contiguous runs of memory.
+//! In 3D (first along x, then y, then z) every pass runs in parallel over lines
+//! with rayon; lines that are strided in memory (y and z) are processed in
+//! blocks of adjacent columns so that reads and writes touch contiguous runs of
+//! memory. A 2D transform runs on the calling thread ([`squared_edt_2d_as`]).
 //!
 //! Values are in physical units² (spacing²). A pixel with no feature anywhere gets
 //! `f64::INFINITY`. The `_f32` variants store the result as `f32` (half the memory
@@ -99,7 +100,15 @@ pub fn squared_edt_3d_f32(features: &[bool], dims: [usize; 3], spacing: [f64; 3]
     squared_edt_3d_as::<f32>(features, dims, spacing)
 }
 
-/// Generic 2D transform.
+/// Generic 2D transform, on the calling thread.
+///
+/// Slices are transformed many at a time by callers that already run in
+/// parallel over slices (the shape interpolators), and one slice of a few
+/// hundred pixels a side is too little work to split between threads. So
+/// the order of the passes is chosen for one thread: first, per column, the
+/// pixel distance to the nearest feature of the column (two sweeps over the
+/// rows that run along whole rows at once), then the lower envelope along
+/// each row, which is contiguous in memory: no gathering of strided columns.
 pub fn squared_edt_2d_as<S: EdtValue>(
     features: &[bool],
     width: usize,
@@ -115,8 +124,48 @@ pub fn squared_edt_2d_as<S: EdtValue>(
     if width == 0 || height == 0 {
         return out;
     }
-    rows_pass(features, &mut out, width, spacing[0]);
-    strided_pass(&mut out, width, height, spacing[1]);
+    // Pixels to the nearest feature of the column; NONE when there is none.
+    const NONE: u32 = u32::MAX;
+    let mut g = vec![NONE; features.len()];
+    for v in 0..height {
+        let row = v * width;
+        let (done, rest) = g.split_at_mut(row);
+        let cur = &mut rest[..width];
+        let f = &features[row..row + width];
+        if v == 0 {
+            for (c, &x) in cur.iter_mut().zip(f) {
+                *c = if x { 0 } else { NONE };
+            }
+        } else {
+            let prev = &done[row - width..];
+            for ((c, &x), &p) in cur.iter_mut().zip(f).zip(prev) {
+                *c = if x { 0 } else { p.saturating_add(1) };
+            }
+        }
+    }
+    for v in (0..height.saturating_sub(1)).rev() {
+        let row = v * width;
+        let (cur, below) = g[row..].split_at_mut(width);
+        for (c, &b) in cur.iter_mut().zip(&below[..width]) {
+            *c = (*c).min(b.saturating_add(1));
+        }
+    }
+    let (su2, sv2) = (spacing[0] * spacing[0], spacing[1] * spacing[1]);
+    let mut env = LowerEnvelope::with_capacity(width);
+    for (grow, orow) in g.chunks(width).zip(out.chunks_mut(width)) {
+        env.build_from(
+            width,
+            su2,
+            grow.iter()
+                .enumerate()
+                .filter(|(_, d)| **d != NONE)
+                .map(|(q, &d)| {
+                    let d = f64::from(d);
+                    (q, d * d * sv2)
+                }),
+        );
+        env.evaluate_sorted(0..width, |p, x| orow[p] = S::from_f64(x));
+    }
     out
 }
 
@@ -170,14 +219,6 @@ pub fn squared_edt_xy_as<S: EdtValue>(
             },
         );
     out
-}
-
-/// First pass: per row, `(s · distance to the nearest feature in the row)²`.
-fn rows_pass<S: EdtValue>(features: &[bool], out: &mut [S], width: usize, s: f64) {
-    let s2 = s * s;
-    out.par_chunks_mut(width)
-        .zip(features.par_chunks(width))
-        .for_each(|(o, f)| row_1d(f, o, s2));
 }
 
 /// Distance along one row by a forward and a backward sweep (exact in 1D).

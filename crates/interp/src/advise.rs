@@ -181,8 +181,9 @@ fn label_rates(
     let mut held_rate = vec![None; drawn.len()];
     let mut errors = Vec::new();
     if drawn.len() >= 3 {
-        let compact = Compact::of(&SparseMask::new(mask, axis, drawn))?;
-        for (pos, e) in held_out_errors(&compact, method)? {
+        let input = SparseMask::new(mask, axis, drawn);
+        let compact = Compact::of(&input)?;
+        for (pos, e) in held_out_errors(&compact, method, &input)? {
             let span = compact.reach(pos) as f64 * 2.0;
             held_rate[pos] = Some(4.0 * e.wrong / span.max(1.0));
             errors.push(e);

@@ -21,6 +21,7 @@ use crate::aligned::ShapeAligned;
 use crate::crop::AXIS_SLICES;
 use crate::loo::{Compact, HeldOut, overlap, pooled_dice};
 use crate::nearest::Nearest;
+use crate::sdf::SdfCache;
 use crate::shape_based::ShapeBased;
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
@@ -64,12 +65,12 @@ impl ShapeAuto {
     /// the label's box ([`crate::crop`]) as on the whole volume.
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
         let near = near_label(input)?;
-        let compact = Compact::of(&SparseMask::new(input.mask, input.axis, &near))?;
+        let compact = Compact::of(&input.on(input.mask, &near))?;
         // The candidates run side by side: each one's runs on the compact
         // stack are too small to keep every core busy on their own.
         let runs: Vec<Result<Vec<HeldOut>, InterpError>> = candidates()
             .par_iter()
-            .map(|c| compact.held_out(c.as_ref()))
+            .map(|c| compact.held_out(c.as_ref(), input))
             .collect();
         let mut scores = Vec::new();
         let mut preds = Vec::new();
@@ -143,6 +144,16 @@ impl Interpolator for ShapeAuto {
 
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         input.validate()?;
+        // The candidates' leave-one-out runs and the final run read the
+        // same drawn slices: their maps are computed once.
+        let cache;
+        let input = match input.maps {
+            Some(_) => input,
+            None => {
+                cache = SdfCache::of_drawn(&input)?;
+                input.with_maps(&cache)
+            }
+        };
         let choice = self.choose(&input)?;
         input.check_cancelled()?;
         candidates()[choice.index].interpolate(input)

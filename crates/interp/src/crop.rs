@@ -18,10 +18,13 @@
 //! pixel's distances to the outlines ([`BoxReach::Outline`]) needs
 //! [`MARGIN`], and gives the whole volume's result voxel for voxel; one that
 //! follows objects as they move between drawn slices ([`BoxReach::Drift`],
-//! `shape-aligned` and so the default) reads as far as they move, and gets
-//! that drift three times over on top. The claim is checked, not trusted: a
-//! result that reaches the box's in-plane sides (where the volume goes on) is
-//! computed again on the whole volume. Tests compare both ways.
+//! `shape-aligned` and so the default) reads as far as they move. It gets a
+//! box sized by how far the outlines' centroid moves ([`LabelBox::tries`]),
+//! and is told it runs on a box ([`SparseMask::in_box`]): where it would
+//! read or paint past the box's sides it stops with
+//! [`InterpError::OutsideBox`], and the runner tries a larger box, then the
+//! whole volume. A result that reaches the box's in-plane sides (where the
+//! volume goes on) is computed again as well. Tests compare both ways.
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
 
@@ -99,6 +102,34 @@ pub fn drift(extents: &[Option<[usize; 4]>]) -> usize {
         .unwrap_or(0)
 }
 
+/// The largest step, in whole pixels (rounded up), of the outlines'
+/// centroid along u or v between two consecutive drawn slices that show the
+/// label; slices `w` pixels wide.
+pub fn centroid_drift(slices: &[DrawnSlice<'_>], w: usize) -> usize {
+    let centroids: Vec<[f64; 2]> = slices
+        .iter()
+        .filter_map(|s| {
+            let [u0, u1, v0, v1] = s.extent?;
+            let (mut n, mut su, mut sv) = (0usize, 0usize, 0usize);
+            for v in v0..=v1 {
+                for (u, &x) in s.inside[v * w + u0..=v * w + u1].iter().enumerate() {
+                    if x {
+                        n += 1;
+                        su += u0 + u;
+                        sv += v;
+                    }
+                }
+            }
+            Some([su as f64 / n as f64, sv as f64 / n as f64])
+        })
+        .collect();
+    centroids
+        .windows(2)
+        .map(|p| (p[0][0] - p[1][0]).abs().max((p[0][1] - p[1][1]).abs()))
+        .fold(0.0f64, f64::max)
+        .ceil() as usize
+}
+
 /// One drawn slice of a label: its index and its whole-structure mask
 /// (row-major `width * height`, as [`Volume::slice`] gives).
 #[derive(Clone, Copy)]
@@ -124,34 +155,64 @@ impl<'a> DrawnSlice<'a> {
 }
 
 impl LabelBox {
-    /// The box of a label drawn on `slices` (sorted by index) of a volume of
-    /// `dims` along `axis` for a method that reads as far as `reach`, or
-    /// `None` when the label is on no drawn slice, the method reads the whole
-    /// volume, or the box is the whole volume (nothing to gain).
-    pub fn of(
+    /// The boxes to run a label drawn on `slices` (sorted by index) of a
+    /// volume of `dims` along `axis` in, for a method that reads as far as
+    /// `reach`, smallest first; empty when the label is on no drawn slice,
+    /// the method reads the whole volume, or the box would be the whole
+    /// volume (nothing to gain).
+    ///
+    /// A method that follows drift ([`BoxReach::Drift`]) first gets
+    /// [`MARGIN`] + 3 (the ring its crops keep) + three times the largest
+    /// step of the outlines' centroid between consecutive drawn slices: an
+    /// object that grows or shrinks without moving (a nucleus towards its
+    /// poles) then runs in a box barely larger than its outlines. Objects
+    /// whose pieces move apart while the centroid stays can need more; such
+    /// a run ends in [`InterpError::OutsideBox`], and the next box, three
+    /// times the largest step of any side of the outlines' extent ([`drift`]),
+    /// is tried before the whole volume.
+    pub fn tries(
         dims: [usize; 3],
         axis: Axis,
         slices: &[DrawnSlice<'_>],
         reach: BoxReach,
-    ) -> Option<LabelBox> {
-        let follows_drift = match reach {
-            BoxReach::Whole => return None,
-            BoxReach::Outline => false,
-            BoxReach::Drift => true,
+    ) -> Vec<LabelBox> {
+        let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| s.extent).collect();
+        let margins = match reach {
+            BoxReach::Whole => return Vec::new(),
+            BoxReach::Outline => vec![MARGIN],
+            BoxReach::Drift => {
+                let w = dims[axis.in_plane().0];
+                let moved = MARGIN + 3 + 3 * centroid_drift(slices, w);
+                let sides = MARGIN + 3 * drift(&extents);
+                if sides > moved {
+                    vec![moved, sides]
+                } else {
+                    vec![moved]
+                }
+            }
         };
+        margins
+            .into_iter()
+            .map_while(|m| Self::with_margin(dims, axis, slices, &extents, m))
+            .collect()
+    }
+
+    /// The box of the outlines grown by `margin` in-plane and by
+    /// [`AXIS_SLICES`] drawn slices along the axis; `None` when nothing is
+    /// drawn or the box is the whole volume.
+    fn with_margin(
+        dims: [usize; 3],
+        axis: Axis,
+        slices: &[DrawnSlice<'_>],
+        extents: &[Option<[usize; 4]>],
+        margin: usize,
+    ) -> Option<LabelBox> {
         let (a, b) = axis.in_plane();
         let (w, h) = (dims[a], dims[b]);
-        // In-plane extent of each drawn slice's outlines: [u_lo, u_hi, v_lo, v_hi].
-        let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| s.extent).collect();
         let first = extents.iter().position(Option::is_some);
         let last = extents.iter().rposition(Option::is_some);
         let ext = joint_extent(extents.iter().flatten().copied());
         let ([u0, u1, v0, v1], first, last) = (ext?, first?, last?);
-        let margin = if follows_drift {
-            MARGIN + 3 * drift(&extents)
-        } else {
-            MARGIN
-        };
         let along_lo = first
             .checked_sub(AXIS_SLICES)
             .map_or(0, |p| slices[p].index);
@@ -233,8 +294,9 @@ impl LabelBox {
         })
     }
 
-    /// Run `method` on the box; `None` when its result reaches an open side
-    /// (the caller then runs it on the whole volume).
+    /// Run `method` on the box; `None` when it would reach past the box
+    /// ([`InterpError::OutsideBox`]) or its result reaches an open side (the
+    /// caller then tries a larger box or the whole volume).
     pub fn interpolate(
         &self,
         method: &dyn Interpolator,
@@ -243,7 +305,10 @@ impl LabelBox {
         slices: &[DrawnSlice<'_>],
     ) -> Result<Option<Mask>, InterpError> {
         let (m, drawn) = self.sparse(geometry, axis, slices)?;
-        let r = method.interpolate(SparseMask::new(&m, axis, &drawn))?;
+        let r = match method.interpolate(SparseMask::new(&m, axis, &drawn).inside_box()) {
+            Err(InterpError::OutsideBox) => return Ok(None),
+            r => r?,
+        };
         Ok((!self.reaches_open_side(&r, axis, geometry.dims)).then_some(r))
     }
 
@@ -292,10 +357,11 @@ mod tests {
             at(15, &off),
             at(18, &off),
         ];
-        let b = LabelBox::of(dims, Axis::Z, &slices, BoxReach::Outline).unwrap();
-        assert_eq!(b.lo, [3, 2, 0]);
-        assert_eq!(b.dims, [3 + 2 * MARGIN, 2 + 2 * MARGIN, 16]);
-        assert_eq!(LabelBox::of(dims, Axis::Z, &slices, BoxReach::Whole), None);
+        let b = LabelBox::tries(dims, Axis::Z, &slices, BoxReach::Outline);
+        assert_eq!(b.len(), 1);
+        assert_eq!(b[0].lo, [3, 2, 0]);
+        assert_eq!(b[0].dims, [3 + 2 * MARGIN, 2 + 2 * MARGIN, 16]);
+        assert_eq!(LabelBox::tries(dims, Axis::Z, &slices, BoxReach::Whole), []);
         // The outline moves one pixel right on z = 9: a drift of 1.
         let mut moved = vec![false; 200];
         for v in 4..6 {
@@ -305,25 +371,28 @@ mod tests {
         }
         let mut drifting = slices;
         drifting[3] = at(9, &moved);
-        let d = LabelBox::of(dims, Axis::Z, &drifting, BoxReach::Drift).unwrap();
-        // A margin of MARGIN + 3 = 5 around u 5..=8, v 4..=5, cut at the
-        // volume's sides (v runs 0..10).
-        assert_eq!(d.lo, [0, 0, 0]);
-        assert_eq!(d.dims, [8 + 5 + 1, 10, 16]);
+        let d = LabelBox::tries(dims, Axis::Z, &drifting, BoxReach::Drift);
+        // The centroid moves by 1/2 (rounded up to 1): a margin of
+        // MARGIN + 3 + 3 = 8 around u 5..=8, v 4..=5, cut at the volume's
+        // sides (v runs 0..10); the sides' step of 1 asks for less, so there
+        // is no second box.
+        assert_eq!(d.len(), 1);
+        assert_eq!(d[0].lo, [0, 0, 0]);
+        assert_eq!(d[0].dims, [8 + 8 + 1, 10, 16]);
         // Nothing drawn: no box; a box as large as the volume: none either.
         assert_eq!(
-            LabelBox::of(
+            LabelBox::tries(
                 dims,
                 Axis::Z,
                 &[at(0, &off), at(5, &off)],
                 BoxReach::Outline
             ),
-            None
+            []
         );
         let all = vec![true; 200];
         assert_eq!(
-            LabelBox::of(dims, Axis::Z, &[at(0, &all), at(29, &all)], BoxReach::Drift),
-            None
+            LabelBox::tries(dims, Axis::Z, &[at(0, &all), at(29, &all)], BoxReach::Drift),
+            []
         );
     }
 }

@@ -108,10 +108,10 @@ fn run<T: Voxel>(
                     })
                     .collect();
                 let dims = sparse.geometry().dims;
-                if let Some(b) = LabelBox::of(dims, axis, &slices, method.box_reach())
-                    && let Some(m) = b.interpolate(method, sparse.geometry(), axis, &slices)?
-                {
-                    return Ok((Piece::Boxed(b, m), None));
+                for b in LabelBox::tries(dims, axis, &slices, method.box_reach()) {
+                    if let Some(m) = b.interpolate(method, sparse.geometry(), axis, &slices)? {
+                        return Ok((Piece::Boxed(b, m), None));
+                    }
                 }
             }
             let m = planes.mask_of(&filled);

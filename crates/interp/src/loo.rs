@@ -75,9 +75,15 @@ impl Compact {
         (r[pos] - r[pos - 1]).min(r[pos + 1] - r[pos])
     }
 
-    /// Predict every interior drawn slice from its neighbours with `method`.
-    /// Empty when there are fewer than three drawn slices.
-    pub fn held_out(&self, method: &dyn Interpolator) -> Result<Vec<HeldOut>, InterpError> {
+    /// Predict every interior drawn slice from its neighbours with `method`,
+    /// the runs being like `like` (the input the stack was made of: its
+    /// cancel, cached maps and box). Empty when there are fewer than three
+    /// drawn slices.
+    pub fn held_out(
+        &self,
+        method: &dyn Interpolator,
+        like: &SparseMask<'_>,
+    ) -> Result<Vec<HeldOut>, InterpError> {
         let n = self.real.len();
         if n < 3 {
             return Ok(Vec::new());
@@ -96,7 +102,7 @@ impl Compact {
                 let (w, hh) = sparse.slice_shape(self.axis);
                 sparse.set_slice(self.axis, h, &vec![false; w * hh])?;
             }
-            let pred = method.interpolate(SparseMask::new(&sparse, self.axis, &kept))?;
+            let pred = method.interpolate(like.on(&sparse, &kept))?;
             for h in held {
                 out.push(HeldOut {
                     pos: h,

@@ -1,5 +1,6 @@
 //! The interpolator trait shared by every method.
 pub use crate::crop::BoxReach;
+use crate::sdf::SdfCache;
 use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, Cancel, Mask, Volume};
 use thiserror::Error;
@@ -13,6 +14,11 @@ pub enum InterpError {
     /// A core error (geometry, slice range).
     #[error(transparent)]
     Core(#[from] interslice_core::CoreError),
+    /// A run on a label's box ([`SparseMask::in_box`]) would read or paint
+    /// past the box's sides: the runner runs it again on a larger box or
+    /// the whole volume, so a user never sees this.
+    #[error("the interpolation reaches past the label's box")]
+    OutsideBox,
 }
 
 /// The input of one interpolation: one label's mask, whose drawn slices
@@ -28,6 +34,15 @@ pub struct SparseMask<'a> {
     /// Checked between slices (and between the stages of a method), so a
     /// request that is dropped or timed out stops within one slice's work.
     pub cancel: Option<&'a Cancel>,
+    /// Signed distance maps of the drawn slices already computed
+    /// ([`SdfCache`]): the runs of `shape-auto` share them.
+    pub maps: Option<&'a SdfCache>,
+    /// The in-plane sides of `mask` are a box's inside the volume
+    /// ([`crate::crop`]), not the volume's: a method that follows objects
+    /// past the drawn outlines ([`BoxReach::Drift`]) returns
+    /// [`InterpError::OutsideBox`] where it would read or paint past them,
+    /// instead of clamping there as it does at the volume's sides.
+    pub in_box: bool,
 }
 
 impl<'a> SparseMask<'a> {
@@ -38,6 +53,8 @@ impl<'a> SparseMask<'a> {
             axis,
             drawn,
             cancel: None,
+            maps: None,
+            in_box: false,
         }
     }
 
@@ -46,6 +63,35 @@ impl<'a> SparseMask<'a> {
         SparseMask {
             cancel: Some(cancel),
             ..self
+        }
+    }
+
+    /// The same input, reading the drawn slices' maps from `maps`.
+    pub fn with_maps(self, maps: &'a SdfCache) -> SparseMask<'a> {
+        SparseMask {
+            maps: Some(maps),
+            ..self
+        }
+    }
+
+    /// The same input, marked as a label's box ([`SparseMask::in_box`]).
+    pub fn inside_box(self) -> SparseMask<'a> {
+        SparseMask {
+            in_box: true,
+            ..self
+        }
+    }
+
+    /// The same input for another mask and drawn list (a stack of its drawn
+    /// slices), keeping its cancel, maps and box.
+    pub fn on<'b>(&self, mask: &'b Mask, drawn: &'b [usize]) -> SparseMask<'b>
+    where
+        'a: 'b,
+    {
+        SparseMask {
+            mask,
+            drawn,
+            ..*self
         }
     }
 

@@ -58,15 +58,17 @@ pub struct HeldOutError {
 }
 
 /// The held-out errors of the leave-one-out of `compact` by `method` (the
-/// method for the stack, [`Interpolator::for_stack`]), with each held-out
-/// slice's position in the stack.
+/// method for the stack, [`Interpolator::for_stack`]) run like `like` (the
+/// input the stack was made of), with each held-out slice's position in the
+/// stack.
 pub fn held_out_errors(
     compact: &Compact,
     method: &dyn Interpolator,
+    like: &SparseMask<'_>,
 ) -> Result<Vec<(usize, HeldOutError)>, InterpError> {
     let r = &compact.real;
     compact
-        .held_out(method)?
+        .held_out(method, like)?
         .into_iter()
         .map(|h| {
             let truth = compact.truth(h.pos);
@@ -132,8 +134,9 @@ pub fn predicted_dice(
     }
     cancel.check()?;
     let stacked = method.for_stack(axis, drawn)?;
-    let compact = Compact::of(&SparseMask::new(mask, axis, drawn))?;
-    let held = held_out_errors(&compact, stacked.as_deref().unwrap_or(method))?;
+    let input = SparseMask::new(mask, axis, drawn);
+    let compact = Compact::of(&input)?;
+    let held = held_out_errors(&compact, stacked.as_deref().unwrap_or(method), &input)?;
     cancel.check()?;
     Ok(estimate(
         &held.into_iter().map(|(_, e)| e).collect::<Vec<_>>(),

@@ -4,6 +4,7 @@ use crate::slices::Plane;
 use crate::{InterpError, SparseMask};
 use interslice_core::edt::squared_edt_2d_f32;
 use rayon::prelude::*;
+use std::collections::HashMap;
 
 /// Signed distance of every pixel of a row-major slice, in physical units:
 /// negative inside (minus the distance to the nearest background pixel
@@ -35,6 +36,74 @@ pub fn signed_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
         .zip(outside.iter().zip(&inside))
         .map(|(&m, (&o, &i))| if m { -i.sqrt() } else { o.sqrt() })
         .collect()
+}
+
+/// The signed distance maps of a label's drawn slices, computed once and
+/// read by every run over those slices.
+///
+/// `shape-auto` runs each candidate twice on the compact stack of the drawn
+/// slices (leave-one-out, [`crate::loo`]) and once more on the label: every
+/// run sees the same drawn slices (a compact slice *is* a drawn slice), and
+/// their two distance transforms are most of a shape method's work. The
+/// maps are keyed by the slice's content and plane, so that a run on any
+/// stack of those slices finds them; a slice not in the cache (a group's
+/// crop, a predicted slice) is computed as before.
+#[derive(Default)]
+pub struct SdfCache {
+    maps: HashMap<SliceKey, Vec<f32>>,
+}
+
+impl std::fmt::Debug for SdfCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "SdfCache({} maps)", self.maps.len())
+    }
+}
+
+/// A slice's pixels (one bit each) and its plane.
+#[derive(PartialEq, Eq, Hash)]
+struct SliceKey {
+    width: usize,
+    height: usize,
+    spacing: [u64; 2],
+    bits: Vec<u64>,
+}
+
+impl SliceKey {
+    fn of(mask: &[bool], plane: &Plane) -> SliceKey {
+        SliceKey {
+            width: plane.width,
+            height: plane.height,
+            spacing: plane.spacing.map(f64::to_bits),
+            bits: mask
+                .chunks(64)
+                .map(|c| c.iter().rev().fold(0u64, |w, &b| (w << 1) | u64::from(b)))
+                .collect(),
+        }
+    }
+}
+
+impl SdfCache {
+    /// The maps of every drawn slice of `input`, computed in parallel.
+    pub fn of_drawn(input: &SparseMask<'_>) -> Result<SdfCache, InterpError> {
+        let plane = Plane::of(input);
+        let maps = input
+            .drawn
+            .par_iter()
+            .map(|&d| {
+                let m = input.mask.slice(input.axis, d)?;
+                let map = signed_distance(&m, &plane);
+                Ok((SliceKey::of(&m, &plane), map))
+            })
+            .collect::<Result<HashMap<_, _>, InterpError>>()?;
+        Ok(SdfCache { maps })
+    }
+
+    /// The map of `mask`, from the cache when it holds it.
+    pub fn signed_distance(cache: Option<&SdfCache>, mask: &[bool], plane: &Plane) -> Vec<f32> {
+        cache
+            .and_then(|c| c.maps.get(&SliceKey::of(mask, plane)))
+            .map_or_else(|| signed_distance(mask, plane), Clone::clone)
+    }
 }
 
 /// "No object near": the value of the drawn-empty slices that have no
@@ -103,8 +172,9 @@ pub fn drawn_maps(
         .into_par_iter()
         .map(|i| {
             // A cancelled run skips the rest of its transforms.
-            (compute[i] && !input.is_cancelled())
-                .then(|| signed_distance(masks[i].as_ref().expect("read"), plane))
+            (compute[i] && !input.is_cancelled()).then(|| {
+                SdfCache::signed_distance(input.maps, masks[i].as_ref().expect("read"), plane)
+            })
         })
         .collect();
     input.check_cancelled()?;

@@ -53,6 +53,7 @@ use interslice_core::edt::squared_edt_2d_f32;
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::{UnionFind, flood_2d};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 mod cap;
 use cap::{Cap, make_cap};
@@ -96,6 +97,8 @@ struct Crop {
     w: usize,
     h: usize,
     d: Vec<f32>,
+    /// The crop was cut by a side of the slice.
+    clipped: bool,
 }
 
 impl Crop {
@@ -124,6 +127,10 @@ impl Crop {
         let u1 = (bb[2] + margin).min(plane.width);
         let v1 = (bb[3] + margin).min(plane.height);
         let (w, h) = (u1 - u0, v1 - v0);
+        let clipped = bb[0] < margin
+            || bb[1] < margin
+            || bb[2] + margin > plane.width
+            || bb[3] + margin > plane.height;
         if comps.len() == slice.comps.len() {
             // The group is the whole foreground, and the crop holds it with
             // its ring of background (or the slice's own edge): its distances
@@ -134,7 +141,14 @@ impl Crop {
                     slice.sdf[row..row + w].iter().copied()
                 })
                 .collect();
-            return Crop { u0, v0, w, h, d };
+            return Crop {
+                u0,
+                v0,
+                w,
+                h,
+                d,
+                clipped,
+            };
         }
         let mut m = vec![false; w * h];
         for v in 0..h {
@@ -162,28 +176,37 @@ impl Crop {
                 .map(|(&x, (&o, &i))| if x { -i.sqrt() } else { o.sqrt() })
                 .collect()
         };
-        Crop { u0, v0, w, h, d }
+        Crop {
+            u0,
+            v0,
+            w,
+            h,
+            d,
+            clipped,
+        }
     }
 
-    /// The row at pixel-index position `pv` of the full slice, to sample
-    /// bilinearly along it ([`CropRow::at`]): the blend of a skipped slice
-    /// reads each crop at one sub-pixel shift, so the vertical weights and
-    /// rows are the same for a whole row of pixels. `None` (every sample
-    /// far) when the row is outside the crop.
+    /// Row `v` of the full slice, moved by `shift` pixels across the rows,
+    /// to sample bilinearly along it ([`CropRow::fill`]): the blend of a
+    /// skipped slice reads each crop at one sub-pixel shift, so the vertical
+    /// weights and rows are the same for a whole row of pixels. `None`
+    /// (every sample far) when the row is outside the crop.
     #[inline]
-    fn row(&self, pv: f64) -> Option<CropRow<'_>> {
-        let y = pv - self.v0 as f64;
-        if y < 0.0 || y > (self.h - 1) as f64 {
+    fn row(&self, v: usize, shift: f64) -> Option<CropRow<'_>> {
+        let (whole, frac) = split_shift(shift);
+        // The sample sits at crop row y + frac.
+        let y = v as isize - self.v0 as isize + whole;
+        let last = self.h as isize - 1;
+        if y < 0 || y > last || (y == last && frac > 0.0) {
             return None;
         }
-        // y >= 0: the cast truncates as floor would (without a libm call).
         let y0 = y as usize;
         let y1 = (y0 + 1).min(self.h - 1);
         Some(CropRow {
             r0: &self.d[self.w * y0..self.w * (y0 + 1)],
             r1: &self.d[self.w * y1..self.w * (y1 + 1)],
-            fy: (y - y0 as f64) as f32,
-            u0: self.u0 as f64,
+            fy: frac as f32,
+            u0: self.u0,
         })
     }
 
@@ -199,32 +222,60 @@ struct CropRow<'a> {
     r1: &'a [f32],
     fy: f32,
     /// The crop's first column in the full slice.
-    u0: f64,
+    u0: usize,
 }
 
 impl CropRow<'_> {
-    /// Bilinear sample at pixel-index column `pu` of the full slice (pixel
-    /// centres at integers); far outside the crop.
+    /// Bilinear samples at the columns `u_lo..` of the full slice moved by
+    /// `shift` pixels, one per element of `out`; far outside the crop.
+    ///
+    /// The shift is split into whole pixels and a fraction once, so every
+    /// sample has the same weights (and the same ones whatever the slice's
+    /// offset in the volume: a label's box computes what the whole volume
+    /// does), and the loop over the crop's inner columns is plain
+    /// arithmetic on two rows, which the compiler vectorises.
     #[inline]
-    fn at(&self, pu: f64) -> f32 {
-        let x = pu - self.u0;
-        let w = self.r0.len();
-        if x < 0.0 || x > (w - 1) as f64 {
-            return FAR;
+    fn fill(&self, u_lo: usize, shift: f64, out: &mut [f32]) {
+        let (whole, frac) = split_shift(shift);
+        let fx = frac as f32;
+        let n = out.len() as isize;
+        let w = self.r0.len() as isize;
+        // Output element i samples crop column j0 + i (+ fx).
+        let j0 = u_lo as isize - self.u0 as isize + whole;
+        let lo = (-j0).clamp(0, n);
+        let hi = (w - 1 - j0).clamp(lo, n);
+        let (lo, hi) = (lo as usize, hi as usize);
+        out[..lo].fill(FAR);
+        if hi > lo {
+            let first = (lo as isize + j0) as usize;
+            let len = hi - lo;
+            let (a, b) = (&self.r0[first..=first + len], &self.r1[first..=first + len]);
+            let fy = self.fy;
+            for (i, o) in out[lo..hi].iter_mut().enumerate() {
+                let top = a[i] * (1.0 - fx) + a[i + 1] * fx;
+                let bot = b[i] * (1.0 - fx) + b[i + 1] * fx;
+                *o = top * (1.0 - fy) + bot * fy;
+            }
         }
-        let x0 = x as usize;
-        let x1 = (x0 + 1).min(w - 1);
-        let fx = (x - x0 as f64) as f32;
-        let top = self.r0[x0] * (1.0 - fx) + self.r0[x1] * fx;
-        let bot = self.r1[x0] * (1.0 - fx) + self.r1[x1] * fx;
-        top * (1.0 - self.fy) + bot * self.fy
+        // Past the inner columns: the last column itself when the sample
+        // falls on it exactly, far beyond.
+        for (i, o) in out.iter_mut().enumerate().skip(hi) {
+            let j = i as isize + j0;
+            *o = if j == w - 1 && frac == 0.0 {
+                let j = j as usize;
+                self.r0[j] * (1.0 - self.fy) + self.r1[j] * self.fy
+            } else {
+                FAR
+            };
+        }
     }
 }
 
-/// Bilinear sample of an optional row: far where there is none.
+/// A shift in pixels as whole pixels and a fraction in `[0, 1)`.
 #[inline]
-fn sample_row(row: &Option<CropRow<'_>>, pu: f64) -> f32 {
-    row.as_ref().map_or(FAR, |r| r.at(pu))
+fn split_shift(shift: f64) -> (isize, f64) {
+    let whole = shift.floor();
+    (whole as isize, shift - whole)
 }
 
 /// Bounding box `[u0, v0, u1, v1)` of a group of components.
@@ -243,9 +294,10 @@ fn group_bbox(slice: &Drawn, comps: &[usize]) -> [usize; 4] {
 }
 
 /// Bilinear sample of a whole-slice map at pixel-index position (pu, pv),
-/// clamped to the slice.
+/// clamped to the slice (noted on `fence` when that clamps).
 #[inline]
-fn sample_full(d: &[f32], plane: &Plane, pu: f64, pv: f64) -> f32 {
+fn sample_full(d: &[f32], plane: &Plane, fence: &Fence, pu: f64, pv: f64) -> f32 {
+    fence.note(!on_plane(plane, pu, pv));
     let x = pu.clamp(0.0, (plane.width - 1) as f64);
     let y = pv.clamp(0.0, (plane.height - 1) as f64);
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
@@ -258,6 +310,41 @@ fn sample_full(d: &[f32], plane: &Plane, pu: f64, pv: f64) -> f32 {
     let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
     let bot = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
     top * (1.0 - fy) + bot * fy
+}
+
+/// Whether `(pu, pv)` (pixel-index position) lies on the slice.
+#[inline]
+fn on_plane(plane: &Plane, pu: f64, pv: f64) -> bool {
+    pu >= 0.0 && pv >= 0.0 && pu <= (plane.width - 1) as f64 && pv <= (plane.height - 1) as f64
+}
+
+/// Records a run on a label's box ([`SparseMask::in_box`]) reading or
+/// painting past the slice's sides, which the whole volume would not clamp.
+struct Fence {
+    /// The sides are a box's (else clamping is the method's rule).
+    active: bool,
+    crossed: AtomicBool,
+}
+
+impl Fence {
+    fn new(active: bool) -> Fence {
+        Fence {
+            active,
+            crossed: AtomicBool::new(false),
+        }
+    }
+
+    /// Note a read or paint past a side when `past` is true.
+    #[inline]
+    fn note(&self, past: bool) {
+        if self.active && past {
+            self.crossed.store(true, Ordering::Relaxed);
+        }
+    }
+
+    fn crossed(&self) -> bool {
+        self.crossed.load(Ordering::Relaxed)
+    }
 }
 
 /// 8-connected components of a row-major mask with their area, centroid
@@ -507,7 +594,17 @@ impl Interpolator for ShapeAligned {
         input.check_cancelled()?;
         let first_cap = end_cap(0, 1);
         let last_cap = end_cap(nd - 1, nd - 2);
-        assemble(&input, |s| {
+        let fence = Fence::new(input.in_box);
+        let crops = plans.iter().flatten().flat_map(|p| match p {
+            GroupPlan::Blend { a, b, .. } => vec![a, b],
+            GroupPlan::Cap { d, .. } => vec![d],
+        });
+        let caps = [&first_cap, &last_cap].into_iter().flatten().map(|c| &c.0);
+        fence.note(crops.chain(caps).any(|c| c.clipped));
+        if fence.crossed() {
+            return Err(InterpError::OutsideBox);
+        }
+        let out = assemble(&input, |s| {
             let mut out = vec![false; plane.len()];
             let mut any = false;
             let p = drawn.partition_point(|&d| d < s);
@@ -555,6 +652,7 @@ impl Interpolator for ShapeAligned {
                                 next: next.as_ref(),
                                 full_a: &slices[g].sdf,
                                 full_b: &slices[g + 1].sdf,
+                                fence: &fence,
                             },
                             &plane,
                         );
@@ -574,7 +672,11 @@ impl Interpolator for ShapeAligned {
                 }
             }
             any.then_some(out)
-        })
+        })?;
+        if fence.crossed() {
+            return Err(InterpError::OutsideBox);
+        }
+        Ok(out)
     }
 }
 
@@ -611,6 +713,7 @@ struct BlendArgs<'a> {
     next: Option<&'a Neighbour<'a>>,
     full_a: &'a [f32],
     full_b: &'a [f32],
+    fence: &'a Fence,
 }
 
 /// Paint the aligned blend of one group on one skipped slice.
@@ -625,6 +728,7 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
         next,
         full_a,
         full_b,
+        fence,
     } = x;
     // The moving frame: a point x on the skipped slice sits at x - tΔ on A
     // and x + (1 - t)Δ on B; the drift per unit length is Δ / h.
@@ -633,22 +737,20 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
         [(1.0 - t) * delta[0], (1.0 - t) * delta[1]],
     );
     // Region that can be inside: both crops moved onto this slice.
-    let u0 = (ca.u0 as f64 - sa[0])
-        .min(cb.u0 as f64 - sb[0])
-        .floor()
-        .max(0.0) as usize;
-    let v0 = (ca.v0 as f64 - sa[1])
-        .min(cb.v0 as f64 - sb[1])
-        .floor()
-        .max(0.0) as usize;
-    let u1 = ((ca.u0 + ca.w) as f64 - sa[0])
-        .max((cb.u0 + cb.w) as f64 - sb[0])
-        .ceil()
-        .min(plane.width as f64) as usize;
-    let v1 = ((ca.v0 + ca.h) as f64 - sa[1])
-        .max((cb.v0 + cb.h) as f64 - sb[1])
-        .ceil()
-        .min(plane.height as f64) as usize;
+    let lo = [0, 1].map(|i| {
+        let c = |k: &Crop| if i == 0 { k.u0 } else { k.v0 };
+        (c(ca) as f64 - sa[i]).min(c(cb) as f64 - sb[i]).floor()
+    });
+    let hi = [0, 1].map(|i| {
+        let c = |k: &Crop| if i == 0 { k.u0 + k.w } else { k.v0 + k.h };
+        (c(ca) as f64 - sa[i]).max(c(cb) as f64 - sb[i]).ceil()
+    });
+    fence.note(
+        lo[0] < 0.0 || lo[1] < 0.0 || hi[0] > plane.width as f64 || hi[1] > plane.height as f64,
+    );
+    let (u0, v0) = (lo[0].max(0.0) as usize, lo[1].max(0.0) as usize);
+    let u1 = hi[0].min(plane.width as f64) as usize;
+    let v1 = hi[1].min(plane.height as f64) as usize;
     let (hf, tf) = (h as f32, t as f32);
     let t2 = tf * tf;
     let t3 = t2 * tf;
@@ -658,17 +760,24 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
         -2.0 * t3 + 3.0 * t2,
         t3 - t2,
     );
+    let n = u1.saturating_sub(u0);
+    let (mut ya_row, mut yb_row) = (vec![FAR; n], vec![FAR; n]);
     for v in v0..v1 {
         let pv = v as f64;
-        let (ra, rb) = (ca.row(pv + sa[1]), cb.row(pv + sb[1]));
+        let (ra, rb) = (ca.row(v, sa[1]), cb.row(v, sb[1]));
         if ra.is_none() && rb.is_none() {
             // Both far: outside on either side.
             continue;
         }
-        for u in u0..u1 {
+        for (row, y, shift) in [(&ra, &mut ya_row, sa[0]), (&rb, &mut yb_row, sb[0])] {
+            match row {
+                Some(r) => r.fill(u0, shift, y),
+                None => y.fill(FAR),
+            }
+        }
+        for (i, (&ya, &yb)) in ya_row.iter().zip(&yb_row).enumerate() {
+            let u = u0 + i;
             let pu = u as f64;
-            let ya = sample_row(&ra, pu + sa[0]);
-            let yb = sample_row(&rb, pu + sb[0]);
             // Where both sides agree, the neighbouring slices need not be read.
             if let Some(inside) = agreed_inside(ya, yb) {
                 if inside {
@@ -683,10 +792,11 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
             let m0 = match prev {
                 Some(n) => {
                     let k = n.h / h;
-                    let wa = sample_full(full_a, plane, pu + sa[0], pv + sa[1]);
+                    let wa = sample_full(full_a, plane, fence, pu + sa[0], pv + sa[1]);
                     let wp = sample_full(
                         n.sdf,
                         plane,
+                        fence,
                         pu + sa[0] - k * delta[0],
                         pv + sa[1] - k * delta[1],
                     );
@@ -697,10 +807,11 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
             let m1 = match next {
                 Some(n) => {
                     let k = n.h / h;
-                    let wb = sample_full(full_b, plane, pu + sb[0], pv + sb[1]);
+                    let wb = sample_full(full_b, plane, fence, pu + sb[0], pv + sb[1]);
                     let wn = sample_full(
                         n.sdf,
                         plane,
+                        fence,
                         pu + sb[0] + k * delta[0],
                         pv + sb[1] + k * delta[1],
                     );
