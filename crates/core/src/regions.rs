@@ -54,21 +54,36 @@ pub fn flood_2d(
 ) -> Vec<u32> {
     debug_assert_eq!(mask.len(), w * h);
     let mut labels = vec![0u32; mask.len()];
-    let mut stack = Vec::new();
+    // Pixels with their (u, v), so that no pixel costs a division; the
+    // neighbours are visited in the order of `neighbours_2d`, written out.
+    let mut stack: Vec<(usize, usize, usize)> = Vec::new();
     let mut next = 0u32;
+    let full = conn == Connectivity::Full;
     for start in 0..mask.len() {
         if !mask[start] || labels[start] != 0 {
             continue;
         }
         next += 1;
         labels[start] = next;
-        stack.push(start);
-        while let Some(p) = stack.pop() {
+        stack.push((start, start % w, start / w));
+        while let Some((p, u, v)) = stack.pop() {
             visit(next - 1, p);
-            for q in neighbours_2d(p, w, h, conn) {
-                if mask[q] && labels[q] == 0 {
-                    labels[q] = next;
-                    stack.push(q);
+            for dv in [-1isize, 0, 1] {
+                let Some(vv) = v.checked_add_signed(dv).filter(|&y| y < h) else {
+                    continue;
+                };
+                for du in [-1isize, 0, 1] {
+                    if (du == 0 && dv == 0) || (!full && du != 0 && dv != 0) {
+                        continue;
+                    }
+                    let Some(uu) = u.checked_add_signed(du).filter(|&x| x < w) else {
+                        continue;
+                    };
+                    let q = uu + w * vv;
+                    if mask[q] && labels[q] == 0 {
+                        labels[q] = next;
+                        stack.push((q, uu, vv));
+                    }
                 }
             }
         }
@@ -302,6 +317,29 @@ mod tests {
                     seen = l;
                 }
             }
+            // Visited depth-first, neighbours in the order of `neighbours_2d`.
+            let mut order = Vec::new();
+            flood_2d(&mask, w, h, conn, |r, p| order.push((r, p)));
+            let mut expected = Vec::new();
+            let mut done = vec![false; mask.len()];
+            for start in 0..mask.len() {
+                if !mask[start] || done[start] {
+                    continue;
+                }
+                let r = labels[start] - 1;
+                done[start] = true;
+                let mut stack = vec![start];
+                while let Some(p) = stack.pop() {
+                    expected.push((r, p));
+                    for q in neighbours_2d(p, w, h, conn) {
+                        if mask[q] && !done[q] {
+                            done[q] = true;
+                            stack.push(q);
+                        }
+                    }
+                }
+            }
+            prop_assert_eq!(order, expected);
         }
 
         #[test]
