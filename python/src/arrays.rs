@@ -8,7 +8,8 @@
 //! the spacing in the same order), so `evaluate` uses those in place too.
 //! Anything else (a strided view) is copied once.
 use crate::error;
-use interslice_core::{Axis, Geometry, LabelVolume};
+use interslice_core::{Axis, Geometry};
+use interslice_interp::labels::DrawnLabels;
 use numpy::ndarray::{Array3, ShapeBuilder};
 use numpy::{
     Element, IntoPyArray, PyArray3, PyArrayMethods, PyReadonlyArray3, PyUntypedArray,
@@ -293,19 +294,18 @@ impl<T: LabelValue + Clone> Strided<'_, T> {
     }
 }
 
-/// A label volume holding the slices `drawn` (along `axis`) of `a` on the
-/// grid `g`, as u16. The other slices stay empty and are never read:
-/// interpolation reads the drawn slices only, and a zeroed buffer that is
-/// never touched costs no memory traffic, where converting the whole array
-/// was most of a call's time on large volumes. Errs on the first value of a
-/// drawn slice that is not a label.
+/// The slices `drawn` (sorted, unique, along `axis`) of `a` on the grid `g`,
+/// as u16 labels: interpolation reads the drawn slices only, so no volume
+/// of the array's size is built (converting the whole array was most of a
+/// call's time on large volumes). Errs on the first value of a drawn slice
+/// that is not a label.
 pub(crate) fn drawn_slices_u16<T: LabelValue + Clone + Sync>(
     a: &Strided<'_, T>,
     g: Geometry,
     axis: Axis,
     drawn: &[usize],
     what: &str,
-) -> PyResult<LabelVolume> {
+) -> PyResult<DrawnLabels> {
     use rayon::prelude::*;
     let slices: Option<Vec<Vec<u16>>> = drawn
         .par_iter()
@@ -316,11 +316,7 @@ pub(crate) fn drawn_slices_u16<T: LabelValue + Clone + Sync>(
             "{what} must hold integer labels 0..=65535 (0 = background)"
         ))
     })?;
-    let mut vol = LabelVolume::zeros(g);
-    for (&index, s) in drawn.iter().zip(&slices) {
-        vol.set_slice(axis, index, s).map_err(error)?;
-    }
-    Ok(vol)
+    DrawnLabels::of_planes(g, axis, drawn, slices).map_err(error)
 }
 
 /// The slices along `axis` of `a` holding any non-zero value, ascending.

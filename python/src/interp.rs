@@ -6,9 +6,9 @@ use crate::arrays::{
 use crate::metrics::spacing3;
 use crate::volumes::geometry;
 use crate::{error, parse_axis};
-use interslice_core::{Axis, LabelVolume, LengthUnit, Volume, Voxel};
-use interslice_interp::labels::{DEFAULT_MAX_LABELS, drawn_labels};
-use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image, interpolate_labels_as};
+use interslice_core::{Axis, LengthUnit, Volume, Voxel};
+use interslice_interp::labels::{DEFAULT_MAX_LABELS, DrawnLabels, interpolate_drawn_as};
+use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -61,7 +61,7 @@ fn interpolated_like<'py, T: Element + FromLabel + Voxel>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let out = py
         .detach(|| {
-            interpolate_labels_as(t.method.as_ref(), &t.sparse, t.axis, &t.drawn, |l| {
+            interpolate_drawn_as(t.method.as_ref(), &t.planes, |l| {
                 T::from_label(l).unwrap_or_default()
             })
         })
@@ -98,7 +98,7 @@ pub fn advise<'py>(
     let advice = py
         .detach(|| {
             interslice_interp::advise::advise(
-                &t.sparse,
+                &t.planes.volume(),
                 t.axis,
                 &t.drawn,
                 count,
@@ -113,7 +113,7 @@ pub fn advise<'py>(
 /// A tracing handed in from Python: the sparse labels, the axis, the drawn
 /// slices and the method (image-aware when an image is given).
 struct Tracing {
-    sparse: LabelVolume,
+    planes: DrawnLabels,
     axis: Axis,
     drawn: Vec<usize>,
     method: Box<dyn Interpolator>,
@@ -124,7 +124,7 @@ impl Tracing {
     /// An error when more than `max` labels are drawn (the CLI's
     /// `--max-labels`, in the same words).
     fn check_labels(&self, max: usize) -> PyResult<()> {
-        let n = drawn_labels(&self.sparse, self.axis, &self.drawn).len();
+        let n = self.planes.labels().len();
         if n > max {
             return Err(error(format!(
                 "labels has {n} labels on its drawn slices, more than max_labels {max} \
@@ -184,15 +184,17 @@ impl Tracing {
             ),
             None => None,
         };
-        let (sparse, drawn) = with_array!(a, x => {
+        let (planes, drawn) = with_array!(a, x => {
             let v = strided(x);
             py.detach(|| {
-                let drawn = drawn.unwrap_or_else(|| nonzero_slices(&v, axis));
+                let mut drawn = drawn.unwrap_or_else(|| nonzero_slices(&v, axis));
+                drawn.sort_unstable();
+                drawn.dedup();
                 drawn_slices_u16(&v, g, axis, &drawn, "labels").map(|s| (s, drawn))
             })?
         });
         Ok(Tracing {
-            sparse,
+            planes,
             axis,
             drawn,
             method,

@@ -36,7 +36,8 @@ pub fn interpolate_labels(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<LabelVolume, InterpError> {
-    Ok(run(method, sparse, axis, drawn, false, |l| l)?.0)
+    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
+    Ok(run(method, &planes, false, |l| l)?.0)
 }
 
 /// [`interpolate_labels`] painting `value(label)` into a volume of another
@@ -50,7 +51,19 @@ pub fn interpolate_labels_as<T: Voxel>(
     drawn: &[usize],
     value: impl Fn(u16) -> T,
 ) -> Result<Volume<T>, InterpError> {
-    Ok(run(method, sparse, axis, drawn, false, value)?.0)
+    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
+    interpolate_drawn_as(method, &planes, value)
+}
+
+/// [`interpolate_labels_as`] from drawn slices already read (a caller that
+/// holds them in another form, such as a numpy array, builds them with
+/// [`DrawnLabels::of_planes`] and never a whole sparse volume).
+pub fn interpolate_drawn_as<T: Voxel>(
+    method: &dyn Interpolator,
+    planes: &DrawnLabels,
+    value: impl Fn(u16) -> T,
+) -> Result<Volume<T>, InterpError> {
+    Ok(run(method, planes, false, value)?.0)
 }
 
 /// [`interpolate_labels`] with the confidence per voxel: the least
@@ -62,7 +75,8 @@ pub fn interpolate_labels_with_confidence(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<(LabelVolume, Volume<f32>), InterpError> {
-    let (labels, conf) = run(method, sparse, axis, drawn, true, |l| l)?;
+    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
+    let (labels, conf) = run(method, &planes, true, |l| l)?;
     Ok((labels, conf.expect("confidence requested")))
 }
 
@@ -77,20 +91,17 @@ type LabelResult = Result<(Piece, Option<Volume<f32>>), InterpError>;
 
 fn run<T: Voxel>(
     method: &dyn Interpolator,
-    sparse: &LabelVolume,
-    axis: Axis,
-    drawn: &[usize],
+    planes: &DrawnLabels,
     confidence: bool,
     value: impl Fn(u16) -> T,
 ) -> Result<(Volume<T>, Option<Volume<f32>>), InterpError> {
-    let drawn = sorted_drawn(sparse, axis, drawn)?;
+    let (axis, drawn, geometry) = (planes.axis, &planes.drawn, &planes.geometry);
     if drawn.len() < 2 {
         return Err(InterpError::Input(format!(
             "interpolation needs at least two drawn slices along {axis}, got {}",
             drawn.len()
         )));
     }
-    let planes = DrawnLabels::read(sparse, axis, &drawn);
     let labels = &planes.labels;
     let results: Vec<LabelResult> = (0..labels.len())
         .into_par_iter()
@@ -107,15 +118,14 @@ fn run<T: Voxel>(
                         extent: planes.extent(i, li),
                     })
                     .collect();
-                let dims = sparse.geometry().dims;
-                for b in LabelBox::tries(dims, axis, &slices, method.box_reach()) {
-                    if let Some(m) = b.interpolate(method, sparse.geometry(), axis, &slices)? {
+                for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
+                    if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
                         return Ok((Piece::Boxed(b, m), None));
                     }
                 }
             }
             let m = planes.mask_of(&filled);
-            let input = SparseMask::new(&m, axis, &drawn);
+            let input = SparseMask::new(&m, axis, drawn);
             if confidence {
                 let (mask, c) = method.interpolate_with_confidence(input)?;
                 Ok((Piece::Whole(mask), Some(c)))
@@ -124,9 +134,9 @@ fn run<T: Voxel>(
             }
         })
         .collect();
-    let mut out: Volume<T> = Volume::zeros(sparse.geometry().clone());
+    let mut out: Volume<T> = Volume::zeros(geometry.clone());
     let mut conf: Option<Volume<f32>> =
-        confidence.then(|| Volume::filled(sparse.geometry().clone(), 1.0f32));
+        confidence.then(|| Volume::filled(geometry.clone(), 1.0f32));
     for (&l, r) in labels.iter().zip(results) {
         let (piece, c) = r?;
         let v = value(l);
@@ -249,8 +259,33 @@ pub struct DrawnLabels {
 impl DrawnLabels {
     /// Read the drawn slices of `sparse` along `axis` (valid indices).
     pub fn read(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> DrawnLabels {
-        let (w, h) = sparse.slice_shape(axis);
         let planes = read_planes(sparse, axis, drawn);
+        Self::of_planes(sparse.geometry().clone(), axis, drawn, planes)
+            .expect("slices read from the volume")
+    }
+
+    /// The drawn slices `drawn` (sorted, unique, inside the grid) along
+    /// `axis` of a label volume on `geometry`, given as `planes` (row-major,
+    /// as [`Volume::slice`] gives them); an error when their number or size
+    /// does not fit.
+    pub fn of_planes(
+        geometry: Geometry,
+        axis: Axis,
+        drawn: &[usize],
+        planes: Vec<Vec<u16>>,
+    ) -> Result<DrawnLabels, InterpError> {
+        let (a, b) = axis.in_plane();
+        let (w, h) = (geometry.dims[a], geometry.dims[b]);
+        let n = geometry.dims[axis.dim()];
+        if planes.len() != drawn.len()
+            || planes.iter().any(|p| p.len() != w * h)
+            || drawn.windows(2).any(|p| p[0] >= p[1])
+            || drawn.last().is_some_and(|&d| d >= n)
+        {
+            return Err(InterpError::Input(format!(
+                "drawn slices do not fit a {w}x{h} plane with {n} slices along {axis}"
+            )));
+        }
         let labels = labels_on(&planes);
         let mut index = vec![u32::MAX; 65536];
         for (i, &l) in labels.iter().enumerate() {
@@ -274,8 +309,8 @@ impl DrawnLabels {
                     .collect()
             })
             .collect();
-        DrawnLabels {
-            geometry: sparse.geometry().clone(),
+        Ok(DrawnLabels {
+            geometry,
             axis,
             drawn: drawn.to_vec(),
             w,
@@ -283,7 +318,16 @@ impl DrawnLabels {
             planes,
             labels,
             extents,
+        })
+    }
+
+    /// The drawn slices as a label volume (zero elsewhere).
+    pub fn volume(&self) -> LabelVolume {
+        let mut v: LabelVolume = Volume::zeros(self.geometry.clone());
+        for (&d, p) in self.drawn.iter().zip(&self.planes) {
+            v.set_slice(self.axis, d, p).expect("slice shape matches");
         }
+        v
     }
 
     /// The labels on any drawn slice, ascending.
