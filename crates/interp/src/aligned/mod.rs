@@ -300,7 +300,8 @@ fn sample_full(d: &[f32], plane: &Plane, fence: &Fence, pu: f64, pv: f64) -> f32
     fence.note(!on_plane(plane, pu, pv));
     let x = pu.clamp(0.0, (plane.width - 1) as f64);
     let y = pv.clamp(0.0, (plane.height - 1) as f64);
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    // Clamped to >= 0: the cast truncates as floor would (no libm call).
+    let (x0, y0) = (x as usize, y as usize);
     let (x1, y1) = (
         (x0 + 1).min(plane.width - 1),
         (y0 + 1).min(plane.height - 1),
