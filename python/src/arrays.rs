@@ -292,6 +292,52 @@ impl<T: LabelValue + Clone> Strided<'_, T> {
         }
         all.then_some(out)
     }
+
+    /// The slices `drawn` along `axis`, as [`Strided::labels_of_slice`]
+    /// gives each; `None` if a value is not a label.
+    ///
+    /// When `axis` is the array's fastest (a C-ordered `[x, y, z]` array read
+    /// along z), a pixel's values along it are contiguous and slice-by-slice
+    /// reading would fetch a cache line per value: every drawn slice is then
+    /// read in one pass over the pixels instead.
+    fn labels_of_slices(&self, axis: Axis, drawn: &[usize]) -> Option<Vec<Vec<u16>>>
+    where
+        T: Sync,
+    {
+        use rayon::prelude::*;
+        if self.strides[axis.dim()] != 1 || drawn.len() < 2 {
+            return drawn
+                .par_iter()
+                .map(|&index| self.labels_of_slice(axis, index))
+                .collect();
+        }
+        let (a, b) = axis.in_plane();
+        let (su, sv) = (self.strides[a], self.strides[b]);
+        let (w, h) = (self.dims[a], self.dims[b]);
+        let n = drawn.len();
+        // Per row v of the plane, that row of every drawn slice.
+        let rows: Option<Vec<Vec<u16>>> = (0..h)
+            .into_par_iter()
+            .map(|v| {
+                let mut rows = vec![0u16; n * w];
+                for u in 0..w {
+                    let line = &self.data[u * su + v * sv..];
+                    for (k, &d) in drawn.iter().enumerate() {
+                        rows[k * w + u] = line[d].label()?;
+                    }
+                }
+                Some(rows)
+            })
+            .collect();
+        let rows = rows?;
+        let mut out = vec![vec![0u16; w * h]; n];
+        for (v, r) in rows.iter().enumerate() {
+            for (k, plane) in out.iter_mut().enumerate() {
+                plane[w * v..w * (v + 1)].copy_from_slice(&r[k * w..(k + 1) * w]);
+            }
+        }
+        Some(out)
+    }
 }
 
 /// The slices `drawn` (sorted, unique, along `axis`) of `a` on the grid `g`,
@@ -306,12 +352,7 @@ pub(crate) fn drawn_slices_u16<T: LabelValue + Clone + Sync>(
     drawn: &[usize],
     what: &str,
 ) -> PyResult<DrawnLabels> {
-    use rayon::prelude::*;
-    let slices: Option<Vec<Vec<u16>>> = drawn
-        .par_iter()
-        .map(|&index| a.labels_of_slice(axis, index))
-        .collect();
-    let slices = slices.ok_or_else(|| {
+    let slices = a.labels_of_slices(axis, drawn).ok_or_else(|| {
         error(format!(
             "{what} must hold integer labels 0..=65535 (0 = background)"
         ))
