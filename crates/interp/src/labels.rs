@@ -36,8 +36,7 @@ pub fn interpolate_labels(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<LabelVolume, InterpError> {
-    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
-    Ok(run(method, &planes, false, |l| l)?.0)
+    interpolate_labels_as(method, sparse, axis, drawn, |l| l)
 }
 
 /// [`interpolate_labels`] painting `value(label)` into a volume of another
@@ -51,8 +50,7 @@ pub fn interpolate_labels_as<T: Voxel>(
     drawn: &[usize],
     value: impl Fn(u16) -> T,
 ) -> Result<Volume<T>, InterpError> {
-    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
-    interpolate_drawn_as(method, &planes, value)
+    interpolate_drawn_as(method, &DrawnLabels::read_any(sparse, axis, drawn)?, value)
 }
 
 /// [`interpolate_labels_as`] from drawn slices already read (a caller that
@@ -75,7 +73,7 @@ pub fn interpolate_labels_with_confidence(
     axis: Axis,
     drawn: &[usize],
 ) -> Result<(LabelVolume, Volume<f32>), InterpError> {
-    let planes = DrawnLabels::read(sparse, axis, &sorted_drawn(sparse, axis, drawn)?);
+    let planes = DrawnLabels::read_any(sparse, axis, drawn)?;
     let (labels, conf) = run(method, &planes, true, |l| l)?;
     Ok((labels, conf.expect("confidence requested")))
 }
@@ -124,7 +122,7 @@ fn run<T: Voxel>(
                     }
                 }
             }
-            let m = planes.mask_of(&filled);
+            let m = planes.on_grid(&filled);
             let input = SparseMask::new(&m, axis, drawn);
             if confidence {
                 let (mask, c) = method.interpolate_with_confidence(input)?;
@@ -264,6 +262,20 @@ impl DrawnLabels {
             .expect("slices read from the volume")
     }
 
+    /// [`DrawnLabels::read`] for drawn indices in any order, duplicates
+    /// allowed; an error names the first one outside the volume.
+    pub fn read_any(
+        sparse: &LabelVolume,
+        axis: Axis,
+        drawn: &[usize],
+    ) -> Result<DrawnLabels, InterpError> {
+        Ok(Self::read(
+            sparse,
+            axis,
+            &sorted_drawn(sparse, axis, drawn)?,
+        ))
+    }
+
     /// The drawn slices `drawn` (sorted, unique, inside the grid) along
     /// `axis` of a label volume on `geometry`, given as `planes` (row-major,
     /// as [`Volume::slice`] gives them); an error when their number or size
@@ -323,11 +335,7 @@ impl DrawnLabels {
 
     /// The drawn slices as a label volume (zero elsewhere).
     pub fn volume(&self) -> LabelVolume {
-        let mut v: LabelVolume = Volume::zeros(self.geometry.clone());
-        for (&d, p) in self.drawn.iter().zip(&self.planes) {
-            v.set_slice(self.axis, d, p).expect("slice shape matches");
-        }
-        v
+        self.on_grid(&self.planes)
     }
 
     /// The labels on any drawn slice, ascending.
@@ -344,13 +352,14 @@ impl DrawnLabels {
             Ok(li) => self.traced(li),
             Err(_) => vec![vec![false; self.w * self.h]; self.drawn.len()],
         };
-        self.mask_of(&filled)
+        self.on_grid(&filled)
     }
 
-    /// A mask of the volume's grid holding `filled` on the drawn slices.
-    fn mask_of(&self, filled: &[Vec<bool>]) -> Mask {
-        let mut m: Mask = Volume::zeros(self.geometry.clone());
-        for (&d, f) in self.drawn.iter().zip(filled) {
+    /// A volume of the label volume's grid holding `slices` on the drawn
+    /// slices (one per drawn slice), zero elsewhere.
+    fn on_grid<T: Voxel>(&self, slices: &[Vec<T>]) -> Volume<T> {
+        let mut m: Volume<T> = Volume::zeros(self.geometry.clone());
+        for (&d, f) in self.drawn.iter().zip(slices) {
             m.set_slice(self.axis, d, f).expect("slice shape matches");
         }
         m
