@@ -181,6 +181,60 @@ fn paint_runs<T: Voxel>(
     Volume::from_vec(geometry.clone(), base).expect("same geometry")
 }
 
+/// The components of a mask held as its runs: every run of foreground
+/// along x with the component it belongs to. A caller that wants more than
+/// the id of every voxel (a component's area, centroid or box) sums it per
+/// run instead of per voxel.
+pub struct ComponentRuns {
+    runs: Runs,
+    /// Component (0-based, in scan order of first voxels) of every run.
+    id: Vec<u32>,
+    count: usize,
+    dims: [usize; 3],
+}
+
+impl ComponentRuns {
+    /// The components of `data` (x fastest, `dims`); a slice of a volume is
+    /// `[w, h, 1]`, where `conn` is 4- or 8-connectivity.
+    pub fn of(data: &[bool], dims: [usize; 3], conn: Connectivity) -> ComponentRuns {
+        let runs = runs_of(data, dims, true);
+        let (id, count) = connect(&runs, dims, conn);
+        ComponentRuns {
+            runs,
+            id,
+            count,
+            dims,
+        }
+    }
+
+    /// Number of components.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Every run as `(component, row, x0, x1)`: voxels `x0..x1` of row
+    /// `row = j + ny * k`, in scan order.
+    pub fn runs(&self) -> impl Iterator<Item = (u32, usize, usize, usize)> + '_ {
+        let rows = self.runs.row_start.len() - 1;
+        (0..rows).flat_map(move |r| {
+            (self.runs.row_start[r]..self.runs.row_start[r + 1]).map(move |run| {
+                let (x0, x1) = self.runs.span[run];
+                (self.id[run], r, x0 as usize, x1 as usize)
+            })
+        })
+    }
+
+    /// The component id + 1 of every voxel (0 = background).
+    pub fn ids(&self) -> Vec<u32> {
+        let nx = self.dims[0];
+        let mut out = vec![0u32; self.dims.iter().product()];
+        for (c, r, x0, x1) in self.runs() {
+            out[r * nx + x0..r * nx + x1].fill(c + 1);
+        }
+        out
+    }
+}
+
 /// Connected components of `mask`: a volume of component ids (1..=n in scan
 /// order of their first voxel, 0 = background) and the voxel count of each
 /// (`sizes[id - 1]`).

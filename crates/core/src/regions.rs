@@ -8,7 +8,7 @@
 //!
 //! The 3D counterparts (components on runs of voxels, 3D hole filling) are in
 //! [`crate::morph`].
-use crate::morph::{Connectivity, label_components};
+use crate::morph::{ComponentRuns, Connectivity, label_components};
 use crate::{LabelVolume, Mask, Volume};
 
 pub use petgraph::unionfind::UnionFind;
@@ -92,16 +92,15 @@ pub fn flood_2d(
 }
 
 /// Connected components of `mask`: labels as [`flood_2d`] gives them and the
-/// pixel count of each (`sizes[label - 1]`).
+/// pixel count of each (`sizes[label - 1]`), found on runs
+/// ([`ComponentRuns`]) rather than pixel by pixel.
 pub fn label_2d(mask: &[bool], w: usize, h: usize, conn: Connectivity) -> (Vec<u32>, Vec<usize>) {
-    let mut sizes: Vec<usize> = Vec::new();
-    let labels = flood_2d(mask, w, h, conn, |r, _| {
-        if r as usize == sizes.len() {
-            sizes.push(0);
-        }
-        sizes[r as usize] += 1;
-    });
-    (labels, sizes)
+    let c = ComponentRuns::of(mask, [w, h, 1], conn);
+    let mut sizes = vec![0usize; c.count()];
+    for (id, _, u0, u1) in c.runs() {
+        sizes[id as usize] += u1 - u0;
+    }
+    (c.ids(), sizes)
 }
 
 /// The holes of `mask`: the pixels off the mask whose component (connected by

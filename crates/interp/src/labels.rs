@@ -132,7 +132,7 @@ fn run<T: Voxel>(
             }
         })
         .collect();
-    let mut out: Volume<T> = Volume::zeros(geometry.clone());
+    let mut out: Volume<T> = zeros_in_parallel(geometry.clone());
     let mut conf: Option<Volume<f32>> =
         confidence.then(|| Volume::filled(geometry.clone(), 1.0f32));
     for (&l, r) in labels.iter().zip(results) {
@@ -158,6 +158,15 @@ fn run<T: Voxel>(
         }
     }
     Ok((out, conf))
+}
+
+/// A volume of zeros written by every core: an output of one volume's size
+/// is mostly memory the allocator hands back from an earlier one (a loop
+/// over volumes, Python arrays freed and allocated again), which must be
+/// cleared, and one core clears it at a fraction of the memory bandwidth.
+fn zeros_in_parallel<T: Voxel>(geometry: Geometry) -> Volume<T> {
+    let data = rayon::iter::repeat_n(T::default(), geometry.len()).collect();
+    Volume::from_vec(geometry, data).expect("one value per voxel")
 }
 
 /// The drawn slices sorted and de-duplicated; an error names the first one

@@ -36,16 +36,59 @@ pub fn agreed_inside(a: f32, b: f32) -> Option<bool> {
     ((a < 0.0) == (b < 0.0)).then_some(a < 0.0)
 }
 
-/// Cubic Hermite value at fraction `t` of an interval of length `h` between
-/// values `y0`, `y1` with slopes `m0`, `m1`.
-#[inline]
-pub fn hermite(y0: f32, y1: f32, m0: f32, m1: f32, h: f32, t: f32) -> f32 {
-    let t2 = t * t;
-    let t3 = t2 * t;
-    (2.0 * t3 - 3.0 * t2 + 1.0) * y0
-        + (t3 - 2.0 * t2 + t) * h * m0
-        + (-2.0 * t3 + 3.0 * t2) * y1
-        + (t3 - t2) * h * m1
+/// The cubic Hermite basis at fraction `t` of an interval.
+#[derive(Debug, Clone, Copy)]
+pub struct HermiteAt {
+    h00: f32,
+    h10: f32,
+    h01: f32,
+    h11: f32,
+}
+
+impl HermiteAt {
+    /// The basis at `t` in `[0, 1]`.
+    pub fn new(t: f32) -> HermiteAt {
+        let t2 = t * t;
+        let t3 = t2 * t;
+        HermiteAt {
+            h00: 2.0 * t3 - 3.0 * t2 + 1.0,
+            h10: t3 - 2.0 * t2 + t,
+            h01: -2.0 * t3 + 3.0 * t2,
+            h11: t3 - t2,
+        }
+    }
+
+    /// The cubic between values `y0`, `y1` with slopes `m0`, `m1` over an
+    /// interval of length `h`.
+    #[inline]
+    pub fn value(&self, y0: f32, y1: f32, m0: f32, m1: f32, h: f32) -> f32 {
+        self.h00 * y0 + self.h10 * h * m0 + self.h01 * y1 + self.h11 * h * m1
+    }
+
+    /// The side of zero PCHIP's cubic between `a` and `b` is on here, when
+    /// the values alone decide it, so that the slopes (and the neighbouring
+    /// slices they are read from) need not be computed: both values on one
+    /// side ([`agreed_inside`]), or, across zero, wherever the slopes fall.
+    /// [`pchip_slope`]'s slopes have the secant's sign and at most three
+    /// times its size, so the cubic lies in `h00 a + h01 b + (b − a)·[3 h11,
+    /// 3 h10]` (`h10 ≥ 0 ≥ h11`); when that range keeps clear of zero (by a
+    /// margin far above rounding) its side is the answer. `None` otherwise.
+    #[inline]
+    pub fn decided_inside(&self, a: f32, b: f32) -> Option<bool> {
+        if let Some(inside) = agreed_inside(a, b) {
+            return Some(inside);
+        }
+        let lin = self.h00 * a + self.h01 * b;
+        let (x, y) = ((b - a) * 3.0 * self.h11, (b - a) * 3.0 * self.h10);
+        let margin = 1e-4 * (a.abs() + b.abs());
+        if lin + x.min(y) > margin {
+            Some(false)
+        } else if lin + x.max(y) < -margin {
+            Some(true)
+        } else {
+            None
+        }
+    }
 }
 
 impl Interpolator for ShapeCubic {
@@ -74,6 +117,7 @@ impl Interpolator for ShapeCubic {
             let g = bracket(drawn, s)?;
             let h = len(g, g + 1);
             let t = (s - drawn[g]) as f32 / (drawn[g + 1] - drawn[g]) as f32;
+            let basis = HermiteAt::new(t);
             let y0 = sdfs[g].as_ref().expect("gap border");
             let y1 = sdfs[g + 1].as_ref().expect("gap border");
             let prev =
@@ -87,7 +131,7 @@ impl Interpolator for ShapeCubic {
             let mut out = vec![false; plane.len()];
             for p in 0..plane.len() {
                 let (a, b) = (y0[p], y1[p]);
-                if let Some(inside) = agreed_inside(a, b) {
+                if let Some(inside) = basis.decided_inside(a, b) {
                     out[p] = inside;
                     continue;
                 }
@@ -100,7 +144,7 @@ impl Interpolator for ShapeCubic {
                     Some((yn, hn)) => pchip_slope(sec, (yn[p] - b) / hn, h, hn),
                     None => sec,
                 };
-                out[p] = hermite(a, b, m0, m1, h, t) < 0.0;
+                out[p] = basis.value(a, b, m0, m1, h) < 0.0;
             }
             Some(out)
         })

@@ -45,13 +45,13 @@
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
 use crate::sdf::{FAR, drawn_maps, signed_distance};
-use crate::shape_cubic::{agreed_inside, pchip_slope};
+use crate::shape_cubic::{HermiteAt, pchip_slope};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
 use interslice_core::edt::squared_edt_2d_f32;
-use interslice_core::morph::Connectivity;
-use interslice_core::regions::{UnionFind, flood_2d};
+use interslice_core::morph::{ComponentRuns, Connectivity};
+use interslice_core::regions::UnionFind;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -349,34 +349,29 @@ impl Fence {
 }
 
 /// 8-connected components of a row-major mask with their area, centroid
-/// and bounding box (pixel sums are exact, so their order does not matter).
+/// and bounding box, summed run by run (the sums are exact integers, so
+/// their order does not matter).
 fn components(mask: &[bool], w: usize, h: usize) -> (Vec<u32>, Vec<Component>) {
-    let mut acc: Vec<(usize, f64, f64, [usize; 4])> = Vec::new();
-    let ids = flood_2d(mask, w, h, Connectivity::Full, |r, p| {
-        if r as usize == acc.len() {
-            acc.push((0, 0.0, 0.0, [usize::MAX, usize::MAX, 0, 0]));
-        }
-        let (n, su, sv, bb) = &mut acc[r as usize];
-        let (u, v) = (p % w, p / w);
-        *n += 1;
-        *su += u as f64;
-        *sv += v as f64;
-        *bb = [
-            bb[0].min(u),
-            bb[1].min(v),
-            bb[2].max(u + 1),
-            bb[3].max(v + 1),
-        ];
-    });
+    let runs = ComponentRuns::of(mask, [w, h, 1], Connectivity::Full);
+    let mut acc = vec![(0u64, 0u64, 0u64, [usize::MAX, usize::MAX, 0, 0]); runs.count()];
+    for (c, v, u0, u1) in runs.runs() {
+        let (n, su, sv, bb) = &mut acc[c as usize];
+        let len = (u1 - u0) as u64;
+        *n += len;
+        // u0 + (u0 + 1) + ... + (u1 - 1).
+        *su += len * (u0 + u1 - 1) as u64 / 2;
+        *sv += len * v as u64;
+        *bb = [bb[0].min(u0), bb[1].min(v), bb[2].max(u1), bb[3].max(v + 1)];
+    }
     let comps = acc
         .into_iter()
         .map(|(n, su, sv, bbox)| Component {
-            area: n,
-            centroid: [su / n as f64, sv / n as f64],
+            area: n as usize,
+            centroid: [su as f64 / n as f64, sv as f64 / n as f64],
             bbox,
         })
         .collect();
-    (ids, comps)
+    (runs.ids(), comps)
 }
 
 /// Groups of matched components of A (indices `0..na`) and B (`na..`):
@@ -752,15 +747,8 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
     let (u0, v0) = (lo[0].max(0.0) as usize, lo[1].max(0.0) as usize);
     let u1 = hi[0].min(plane.width as f64) as usize;
     let v1 = hi[1].min(plane.height as f64) as usize;
-    let (hf, tf) = (h as f32, t as f32);
-    let t2 = tf * tf;
-    let t3 = t2 * tf;
-    let (h00, h10, h01, h11) = (
-        2.0 * t3 - 3.0 * t2 + 1.0,
-        t3 - 2.0 * t2 + tf,
-        -2.0 * t3 + 3.0 * t2,
-        t3 - t2,
-    );
+    let hf = h as f32;
+    let basis = HermiteAt::new(t as f32);
     let n = u1.saturating_sub(u0);
     let (mut ya_row, mut yb_row) = (vec![FAR; n], vec![FAR; n]);
     for v in v0..v1 {
@@ -779,8 +767,8 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
         for (i, (&ya, &yb)) in ya_row.iter().zip(&yb_row).enumerate() {
             let u = u0 + i;
             let pu = u as f64;
-            // Where both sides agree, the neighbouring slices need not be read.
-            if let Some(inside) = agreed_inside(ya, yb) {
+            // Where the values decide, the neighbouring slices need not be read.
+            if let Some(inside) = basis.decided_inside(ya, yb) {
                 if inside {
                     out[u + plane.width * v] = true;
                 }
@@ -820,8 +808,7 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
                 }
                 None => sec,
             };
-            let f = h00 * ya + h10 * hf * m0 + h01 * yb + h11 * hf * m1;
-            if f < 0.0 {
+            if basis.value(ya, yb, m0, m1, hf) < 0.0 {
                 out[u + plane.width * v] = true;
             }
         }
