@@ -283,8 +283,19 @@ impl<T: LabelValue + Clone> Strided<'_, T> {
         let mut all = true;
         for v in 0..h {
             let row = &mut out[w * v..w * (v + 1)];
+            let start = base + v * sv;
+            if su == 1 {
+                // A contiguous row (a Fortran-ordered array read along z):
+                // a loop the compiler vectorises.
+                for (o, x) in row.iter_mut().zip(&self.data[start..start + w]) {
+                    let l = x.label();
+                    all &= l.is_some();
+                    *o = l.unwrap_or(0);
+                }
+                continue;
+            }
             for (u, o) in row.iter_mut().enumerate() {
-                match self.data[base + u * su + v * sv].label() {
+                match self.data[start + u * su].label() {
                     Some(l) => *o = l,
                     None => all = false,
                 }
