@@ -15,27 +15,52 @@ use std::collections::HashMap;
 /// "far outside", so that blending stays arithmetic), and a slice without
 /// background gets its negative.
 pub fn signed_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
-    let any_fg = mask.iter().any(|&m| m);
-    let any_bg = mask.iter().any(|&m| !m);
+    let (w, h) = (plane.width, plane.height);
     let far = empty_value(plane);
-    if !any_fg {
+    // The foreground's box `[u0, v0, u1, v1)`.
+    let mut bb = [usize::MAX, usize::MAX, 0, 0];
+    for (v, row) in mask.chunks(w).enumerate() {
+        if let (Some(a), Some(b)) = (row.iter().position(|&m| m), row.iter().rposition(|&m| m)) {
+            bb = [bb[0].min(a), bb[1].min(v), bb[2].max(b + 1), v + 1];
+        }
+    }
+    if bb[2] == 0 {
         return vec![far; mask.len()];
     }
-    if !any_bg {
+    if !mask.iter().any(|&m| !m) {
         return vec![-far; mask.len()];
     }
-    let (w, h) = (plane.width, plane.height);
+    // The inside distances are computed on the foreground's box grown by one
+    // pixel: the background pixel nearest to a foreground pixel lies there
+    // (any farther one, moved onto the ring around the box, is background
+    // and nearer), so the transform of that crop is the whole slice's there.
+    let (cu0, cv0) = (bb[0].saturating_sub(1), bb[1].saturating_sub(1));
+    let (cu1, cv1) = ((bb[2] + 1).min(w), (bb[3] + 1).min(h));
+    let cw = cu1 - cu0;
     let (outside, inside) = rayon::join(
         || squared_edt_2d_f32(mask, w, h, plane.spacing),
         || {
-            let bg: Vec<bool> = mask.iter().map(|&m| !m).collect();
-            squared_edt_2d_f32(&bg, w, h, plane.spacing)
+            let bg: Vec<bool> = (cv0..cv1)
+                .flat_map(|v| mask[cu0 + w * v..cu1 + w * v].iter().map(|&m| !m))
+                .collect();
+            squared_edt_2d_f32(&bg, cw, cv1 - cv0, plane.spacing)
         },
     );
-    mask.iter()
-        .zip(outside.iter().zip(&inside))
-        .map(|(&m, (&o, &i))| if m { -i.sqrt() } else { o.sqrt() })
-        .collect()
+    let mut out: Vec<f32> = outside.iter().map(|&o| o.sqrt()).collect();
+    for v in cv0..cv1 {
+        let row = cu0 + w * v;
+        let crop = &inside[cw * (v - cv0)..cw * (v - cv0 + 1)];
+        for ((o, &m), &i) in out[row..row + cw]
+            .iter_mut()
+            .zip(&mask[row..row + cw])
+            .zip(crop)
+        {
+            if m {
+                *o = -i.sqrt();
+            }
+        }
+    }
+    out
 }
 
 /// The signed distance maps of a label's drawn slices, computed once and
@@ -206,4 +231,54 @@ pub fn drawn_maps(
             Some(out)
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Against the definition: minus the distance to the nearest
+        /// background pixel inside, the distance to the nearest foreground
+        /// pixel outside (pixel centres, physical units), so the inside
+        /// transform on the foreground's box is the whole slice's.
+        #[test]
+        fn signed_distance_is_the_distance_to_the_other_side(
+            w in 1usize..12,
+            h in 1usize..12,
+            bits in any::<u128>(),
+            sparse in any::<bool>(),
+            su in 0.3f64..2.0,
+            sv in 0.3f64..2.0,
+        ) {
+            let mask: Vec<bool> = (0..w * h)
+                .map(|i| {
+                    let b = bits >> (i % 128) & 1 == 1;
+                    if sparse { b && bits >> ((i * 7 + 3) % 128) & 1 == 1 } else { b }
+                })
+                .collect();
+            let plane = Plane { width: w, height: h, spacing: [su, sv], slice_spacing: 1.0 };
+            let got = signed_distance(&mask, &plane);
+            let far = empty_value(&plane);
+            for p in 0..w * h {
+                let (u, v) = ((p % w) as f64, (p / w) as f64);
+                let nearest = (0..w * h)
+                    .filter(|&q| mask[q] != mask[p])
+                    .map(|q| {
+                        let (x, y) = ((q % w) as f64, (q / w) as f64);
+                        ((x - u) * su).hypot((y - v) * sv)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                let want = match (nearest.is_finite(), mask[p]) {
+                    (true, true) => -nearest,
+                    (true, false) => nearest,
+                    (false, true) => -f64::from(far),
+                    (false, false) => f64::from(far),
+                };
+                prop_assert!((f64::from(got[p]) - want).abs() <= 1e-4 * want.abs().max(1.0),
+                    "pixel {p}: {} vs {want}", got[p]);
+            }
+        }
+    }
 }

@@ -49,7 +49,6 @@ use crate::shape_cubic::{HermiteAt, pchip_slope};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
-use interslice_core::edt::squared_edt_2d_f32;
 use interslice_core::morph::{ComponentRuns, Connectivity};
 use interslice_core::regions::UnionFind;
 use rayon::prelude::*;
@@ -162,20 +161,9 @@ impl Crop {
             height: h,
             ..*plane
         };
-        // A crop without background would make the inside distances
-        // unbounded; the margin guarantees a ring of background unless the
-        // group fills the slice, where the whole-slice rule applies.
-        let d = if m.iter().all(|&x| x) {
-            signed_distance(&m, &sub)
-        } else {
-            let outside = squared_edt_2d_f32(&m, w, h, plane.spacing);
-            let bg: Vec<bool> = m.iter().map(|&x| !x).collect();
-            let inside = squared_edt_2d_f32(&bg, w, h, plane.spacing);
-            m.iter()
-                .zip(outside.iter().zip(&inside))
-                .map(|(&x, (&o, &i))| if x { -i.sqrt() } else { o.sqrt() })
-                .collect()
-        };
+        // The group's pixels are not empty; a crop without background (the
+        // group fills the slice) gets the whole-slice rule.
+        let d = signed_distance(&m, &sub);
         Crop {
             u0,
             v0,
