@@ -212,6 +212,15 @@ impl ComponentRuns {
         self.count
     }
 
+    /// The voxel count of every component.
+    pub fn sizes(&self) -> Vec<u64> {
+        let mut sizes = vec![0u64; self.count];
+        for (&c, &(x0, x1)) in self.id.iter().zip(&self.runs.span) {
+            sizes[c as usize] += u64::from(x1 - x0);
+        }
+        sizes
+    }
+
     /// Every run as `(component, row, x0, x1)`: voxels `x0..x1` of row
     /// `row = j + ny * k`, in scan order.
     pub fn runs(&self) -> impl Iterator<Item = (u32, usize, usize, usize)> + '_ {
@@ -239,43 +248,35 @@ impl ComponentRuns {
 /// order of their first voxel, 0 = background) and the voxel count of each
 /// (`sizes[id - 1]`).
 pub fn label_components(mask: &Mask, conn: Connectivity) -> (Volume<u32>, Vec<u64>) {
-    let dims = mask.dims();
-    let runs = runs_of(mask.data(), dims, true);
-    let (id, n) = connect(&runs, dims, conn);
-    let mut sizes = vec![0u64; n];
-    for (r, &(x0, x1)) in runs.span.iter().enumerate() {
-        sizes[id[r] as usize] += (x1 - x0) as u64;
-    }
-    let labels = paint_runs(mask.geometry(), &runs, vec![0u32; mask.data().len()], |r| {
-        Some(id[r] + 1)
-    });
-    (labels, sizes)
+    let c = ComponentRuns::of(mask.data(), mask.dims(), conn);
+    let labels = paint_runs(
+        mask.geometry(),
+        &c.runs,
+        vec![0u32; mask.data().len()],
+        |r| Some(c.id[r] + 1),
+    );
+    (labels, c.sizes())
 }
 
 /// The largest connected component of `mask` (the first one in scan order on
 /// ties); an empty mask stays empty.
 pub fn largest_component(mask: &Mask, conn: Connectivity) -> Mask {
-    let dims = mask.dims();
-    let runs = runs_of(mask.data(), dims, true);
-    let (id, n) = connect(&runs, dims, conn);
-    if n == 0 {
+    let c = ComponentRuns::of(mask.data(), mask.dims(), conn);
+    if c.count == 0 {
         return mask.clone();
     }
-    let mut sizes = vec![0u64; n];
-    for (r, &(x0, x1)) in runs.span.iter().enumerate() {
-        sizes[id[r] as usize] += (x1 - x0) as u64;
-    }
+    let sizes = c.sizes();
     let mut best = 0;
-    for (c, &s) in sizes.iter().enumerate() {
+    for (k, &s) in sizes.iter().enumerate() {
         if s > sizes[best] {
-            best = c;
+            best = k;
         }
     }
     paint_runs(
         mask.geometry(),
-        &runs,
+        &c.runs,
         vec![false; mask.data().len()],
-        |r| (id[r] as usize == best).then_some(true),
+        |r| (c.id[r] as usize == best).then_some(true),
     )
 }
 

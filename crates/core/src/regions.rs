@@ -96,11 +96,7 @@ pub fn flood_2d(
 /// ([`ComponentRuns`]) rather than pixel by pixel.
 pub fn label_2d(mask: &[bool], w: usize, h: usize, conn: Connectivity) -> (Vec<u32>, Vec<usize>) {
     let c = ComponentRuns::of(mask, [w, h, 1], conn);
-    let mut sizes = vec![0usize; c.count()];
-    for (id, _, u0, u1) in c.runs() {
-        sizes[id as usize] += u1 - u0;
-    }
-    (c.ids(), sizes)
+    (c.ids(), c.sizes().into_iter().map(|s| s as usize).collect())
 }
 
 /// The holes of `mask`: the pixels off the mask whose component (connected by
