@@ -5,6 +5,7 @@ use crate::{InterpError, SparseMask};
 use interslice_core::edt::squared_edt_2d_f32;
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// Signed distance of every pixel of a row-major slice, in physical units:
 /// negative inside (minus the distance to the nearest background pixel
@@ -72,10 +73,11 @@ pub fn signed_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
 /// their two distance transforms are most of a shape method's work. The
 /// maps are keyed by the slice's content and plane, so that a run on any
 /// stack of those slices finds them; a slice not in the cache (a group's
-/// crop, a predicted slice) is computed as before.
+/// crop, a predicted slice) is computed as before. A map is shared, not
+/// copied, by every run that reads it.
 #[derive(Default)]
 pub struct SdfCache {
-    maps: HashMap<SliceKey, Vec<f32>>,
+    maps: HashMap<SliceKey, Map>,
 }
 
 impl std::fmt::Debug for SdfCache {
@@ -83,6 +85,9 @@ impl std::fmt::Debug for SdfCache {
         write!(f, "SdfCache({} maps)", self.maps.len())
     }
 }
+
+/// A signed distance map of a slice, shared by the runs that read it.
+pub type Map = Arc<[f32]>;
 
 /// A slice's pixels (one bit each) and its plane.
 #[derive(PartialEq, Eq, Hash)]
@@ -116,7 +121,7 @@ impl SdfCache {
             .par_iter()
             .map(|&d| {
                 let m = input.mask.slice(input.axis, d)?;
-                let map = signed_distance(&m, &plane);
+                let map = Map::from(signed_distance(&m, &plane));
                 Ok((SliceKey::of(&m, &plane), map))
             })
             .collect::<Result<HashMap<_, _>, InterpError>>()?;
@@ -124,10 +129,10 @@ impl SdfCache {
     }
 
     /// The map of `mask`, from the cache when it holds it.
-    pub fn signed_distance(cache: Option<&SdfCache>, mask: &[bool], plane: &Plane) -> Vec<f32> {
+    pub fn signed_distance(cache: Option<&SdfCache>, mask: &[bool], plane: &Plane) -> Map {
         cache
             .and_then(|c| c.maps.get(&SliceKey::of(mask, plane)))
-            .map_or_else(|| signed_distance(mask, plane), Clone::clone)
+            .map_or_else(|| Map::from(signed_distance(mask, plane)), Arc::clone)
     }
 }
 
@@ -164,7 +169,7 @@ pub fn drawn_maps(
     input: &SparseMask<'_>,
     plane: &Plane,
     needed: &[bool],
-) -> Result<Vec<Option<Vec<f32>>>, InterpError> {
+) -> Result<Vec<Option<Map>>, InterpError> {
     let d = input.drawn;
     let n = d.len();
     let masks: Vec<Option<Vec<bool>>> = (0..n)
@@ -193,7 +198,7 @@ pub fn drawn_maps(
                     || (i + 1 < n && needed[i + 1] && empty[i + 1]))
         })
         .collect();
-    let sdfs: Vec<Option<Vec<f32>>> = (0..n)
+    let sdfs: Vec<Option<Map>> = (0..n)
         .into_par_iter()
         .map(|i| {
             // A cancelled run skips the rest of its transforms.
@@ -213,13 +218,13 @@ pub fn drawn_maps(
             if !empty[i] {
                 return sdfs[i].clone();
             }
-            let neighbours: Vec<&Vec<f32>> = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
+            let neighbours: Vec<&Map> = [i.checked_sub(1), (i + 1 < n).then_some(i + 1)]
                 .into_iter()
                 .flatten()
                 .filter_map(|j| sdfs[j].as_ref().filter(|_| !empty[j]))
                 .collect();
             if neighbours.is_empty() {
-                return Some(vec![FAR; plane.len()]);
+                return Some(Map::from(vec![FAR; plane.len()]));
             }
             let mut out = vec![FAR; plane.len()];
             for m in neighbours {
@@ -228,7 +233,7 @@ pub fn drawn_maps(
                     *o = o.min(x + r);
                 }
             }
-            Some(out)
+            Some(Map::from(out))
         })
         .collect())
 }

@@ -10,7 +10,7 @@
 //! (a cone) instead of being cut off right after the last slice showing it.
 //! Objects are not matched: a shifted object is blended into the overlap of
 //! its two positions, and an object on one side only is coned, not capped.
-use crate::sdf::drawn_maps;
+use crate::sdf::{Map, drawn_maps};
 use crate::slices::{Plane, assemble, bracket};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
@@ -27,7 +27,7 @@ pub fn drawn_sdfs(
     input: &SparseMask<'_>,
     plane: &Plane,
     extra: usize,
-) -> Result<Vec<Option<Vec<f32>>>, InterpError> {
+) -> Result<Vec<Option<Map>>, InterpError> {
     let d = input.drawn;
     let n = d.len();
     let mut needed = vec![false; n];
@@ -65,7 +65,7 @@ impl Interpolator for ShapeBased {
             let db = sdfs[g + 1].as_ref().expect("gap border");
             Some(
                 da.iter()
-                    .zip(db)
+                    .zip(db.iter())
                     .map(|(&x, &y)| (1.0 - t) * x + t * y < 0.0)
                     .collect(),
             )

@@ -36,25 +36,43 @@ pub fn agreed_inside(a: f32, b: f32) -> Option<bool> {
     ((a < 0.0) == (b < 0.0)).then_some(a < 0.0)
 }
 
-/// The cubic Hermite basis at fraction `t` of an interval.
+/// How steep PCHIP's slope at a knot can be, as a multiple of the secant of
+/// the gap being interpolated (length `h`): [`pchip_slope`]'s weighted
+/// harmonic mean has the secant's sign (or is zero) and is at most
+/// `3 (h + o) / (h + 2 o)` times it, `o` being the length of the gap on the
+/// knot's other side (2 for equal gaps, never more than 3); with no gap on
+/// that side the slope is the secant itself.
+pub fn slope_bound(h: f32, other: Option<f32>) -> f32 {
+    other.map_or(1.0, |o| 3.0 * (h + o) / (h + 2.0 * o))
+}
+
+/// The cubic Hermite basis at fraction `t` of an interval, and the bounds of
+/// its slope terms that decide a side without the slopes.
 #[derive(Debug, Clone, Copy)]
 pub struct HermiteAt {
     h00: f32,
     h10: f32,
     h01: f32,
     h11: f32,
+    /// `h10` and `h11` times the [`slope_bound`]s of the start and end knots.
+    r10: f32,
+    r11: f32,
 }
 
 impl HermiteAt {
-    /// The basis at `t` in `[0, 1]`.
-    pub fn new(t: f32) -> HermiteAt {
+    /// The basis at `t` in `[0, 1]`, the start and end knots' slopes being at
+    /// most `bounds` times the secant ([`slope_bound`]).
+    pub fn new(t: f32, bounds: [f32; 2]) -> HermiteAt {
         let t2 = t * t;
         let t3 = t2 * t;
+        let (h10, h11) = (t3 - 2.0 * t2 + t, t3 - t2);
         HermiteAt {
             h00: 2.0 * t3 - 3.0 * t2 + 1.0,
-            h10: t3 - 2.0 * t2 + t,
+            h10,
             h01: -2.0 * t3 + 3.0 * t2,
-            h11: t3 - t2,
+            h11,
+            r10: bounds[0] * h10,
+            r11: bounds[1] * h11,
         }
     }
 
@@ -69,25 +87,39 @@ impl HermiteAt {
     /// the values alone decide it, so that the slopes (and the neighbouring
     /// slices they are read from) need not be computed: both values on one
     /// side ([`agreed_inside`]), or, across zero, wherever the slopes fall.
-    /// [`pchip_slope`]'s slopes have the secant's sign and at most three
-    /// times its size, so the cubic lies in `h00 a + h01 b + (b − a)·[3 h11,
-    /// 3 h10]` (`h10 ≥ 0 ≥ h11`); when that range keeps clear of zero (by a
-    /// margin far above rounding) its side is the answer. `None` otherwise.
+    /// The slopes have the secant's sign and at most the knots' bounds times
+    /// its size, so the cubic lies in `h00 a + h01 b + (b − a)·[r11, r10]`
+    /// (`h10 ≥ 0 ≥ h11`); when that range keeps clear of zero (by a margin
+    /// far above rounding) its side is the answer. `None` otherwise.
     #[inline]
     pub fn decided_inside(&self, a: f32, b: f32) -> Option<bool> {
-        if let Some(inside) = agreed_inside(a, b) {
-            return Some(inside);
+        match self.sides(a, b) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
         }
+    }
+
+    /// [`HermiteAt::decided_inside`] as two flags, surely inside and surely
+    /// outside (at most one is true), computed without a branch so that a
+    /// loop over a row of pixels runs on vector lanes.
+    #[inline]
+    pub fn sides(&self, a: f32, b: f32) -> (bool, bool) {
+        let agree = (a < 0.0) == (b < 0.0);
         let lin = self.h00 * a + self.h01 * b;
-        let (x, y) = ((b - a) * 3.0 * self.h11, (b - a) * 3.0 * self.h10);
+        let (x, y) = ((b - a) * self.r11, (b - a) * self.r10);
         let margin = 1e-4 * (a.abs() + b.abs());
-        if lin + x.min(y) > margin {
-            Some(false)
-        } else if lin + x.max(y) < -margin {
-            Some(true)
+        let inside = if agree {
+            a < 0.0
         } else {
-            None
-        }
+            lin + x.max(y) < -margin
+        };
+        let outside = if agree {
+            a >= 0.0
+        } else {
+            lin + x.min(y) > margin
+        };
+        (inside, outside)
     }
 }
 
@@ -117,7 +149,6 @@ impl Interpolator for ShapeCubic {
             let g = bracket(drawn, s)?;
             let h = len(g, g + 1);
             let t = (s - drawn[g]) as f32 / (drawn[g + 1] - drawn[g]) as f32;
-            let basis = HermiteAt::new(t);
             let y0 = sdfs[g].as_ref().expect("gap border");
             let y1 = sdfs[g + 1].as_ref().expect("gap border");
             let prev =
@@ -128,6 +159,13 @@ impl Interpolator for ShapeCubic {
                     len(g + 1, g + 2),
                 )
             });
+            let basis = HermiteAt::new(
+                t,
+                [
+                    slope_bound(h, prev.map(|p| p.1)),
+                    slope_bound(h, next.map(|n| n.1)),
+                ],
+            );
             let mut out = vec![false; plane.len()];
             for p in 0..plane.len() {
                 let (a, b) = (y0[p], y1[p]);
@@ -148,5 +186,48 @@ impl Interpolator for ShapeCubic {
             }
             Some(out)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Wherever the values alone decide a side, the whole cubic with
+        /// PCHIP's slopes from any neighbours is on that side: the slope
+        /// bounds hold for every pair of gap lengths. The neighbours' secants
+        /// are drawn as multiples of the gap's own (up to a thousand times,
+        /// where the slope nears its bound; negative: an extremum).
+        #[test]
+        fn a_decided_side_is_the_cubics_side(
+            a in -50.0f32..50.0,
+            b in -50.0f32..50.0,
+            rp in proptest::option::of(-2.0f32..1000.0),
+            rn in proptest::option::of(-2.0f32..1000.0),
+            h in 0.2f32..20.0,
+            hp in 0.2f32..20.0,
+            hn in 0.2f32..20.0,
+            t in 0.0f32..1.0,
+        ) {
+            let sec = (b - a) / h;
+            let m0 = rp.map_or(sec, |r| pchip_slope(r * sec, sec, hp, h));
+            let m1 = rn.map_or(sec, |r| pchip_slope(sec, r * sec, h, hn));
+            let basis = HermiteAt::new(
+                t,
+                [slope_bound(h, rp.map(|_| hp)), slope_bound(h, rn.map(|_| hn))],
+            );
+            let (inside, outside) = basis.sides(a, b);
+            prop_assert!(!(inside && outside));
+            let v = basis.value(a, b, m0, m1, h);
+            if inside {
+                prop_assert!(v < 0.0, "decided inside, cubic {v}");
+            }
+            if outside {
+                prop_assert!(v >= 0.0, "decided outside, cubic {v}");
+            }
+            prop_assert_eq!(basis.decided_inside(a, b), inside.then_some(true).or(outside.then_some(false)));
+        }
     }
 }

@@ -44,8 +44,8 @@
 //!
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
-use crate::sdf::{FAR, drawn_maps, signed_distance};
-use crate::shape_cubic::{HermiteAt, pchip_slope};
+use crate::sdf::{FAR, Map, drawn_maps, signed_distance};
+use crate::shape_cubic::{HermiteAt, pchip_slope, slope_bound};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
@@ -86,7 +86,7 @@ struct Drawn {
     /// Component id + 1 per pixel (0 = background).
     ids: Vec<u32>,
     comps: Vec<Component>,
-    sdf: Vec<f32>,
+    sdf: Map,
 }
 
 /// A signed distance map on a rectangular crop of the slice.
@@ -736,9 +736,16 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
     let u1 = hi[0].min(plane.width as f64) as usize;
     let v1 = hi[1].min(plane.height as f64) as usize;
     let hf = h as f32;
-    let basis = HermiteAt::new(t as f32);
+    let basis = HermiteAt::new(
+        t as f32,
+        [
+            slope_bound(hf, prev.map(|n| n.h as f32)),
+            slope_bound(hf, next.map(|n| n.h as f32)),
+        ],
+    );
     let n = u1.saturating_sub(u0);
     let (mut ya_row, mut yb_row) = (vec![FAR; n], vec![FAR; n]);
+    let mut open_row = vec![false; n];
     for v in v0..v1 {
         let pv = v as f64;
         let (ra, rb) = (ca.row(v, sa[1]), cb.row(v, sb[1]));
@@ -752,16 +759,26 @@ fn blend(out: &mut [bool], x: BlendArgs<'_>, plane: &Plane) {
                 None => y.fill(FAR),
             }
         }
+        // Where the values decide, the neighbouring slices need not be read:
+        // one pass over the row writes those pixels (vector lanes, no
+        // branch), a second one visits the rest, if any.
+        let row = &mut out[u0 + plane.width * v..u0 + n + plane.width * v];
+        let mut any_open = false;
+        for (((o, open), &ya), &yb) in row.iter_mut().zip(&mut open_row).zip(&ya_row).zip(&yb_row) {
+            let (inside, outside) = basis.sides(ya, yb);
+            *o |= inside;
+            *open = !(inside | outside);
+            any_open |= *open;
+        }
+        if !any_open {
+            continue;
+        }
         for (i, (&ya, &yb)) in ya_row.iter().zip(&yb_row).enumerate() {
-            let u = u0 + i;
-            let pu = u as f64;
-            // Where the values decide, the neighbouring slices need not be read.
-            if let Some(inside) = basis.decided_inside(ya, yb) {
-                if inside {
-                    out[u + plane.width * v] = true;
-                }
+            if !open_row[i] {
                 continue;
             }
+            let u = u0 + i;
+            let pu = u as f64;
             let sec = (yb - ya) / hf;
             // Slopes from the whole neighbouring slices, sampled where the
             // moving frame would be on them, minus this pair's whole-slice
