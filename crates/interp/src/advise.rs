@@ -25,6 +25,15 @@
 //!   outermost gaps (no held-out slice on one side) and a tracing of only
 //!   two slices.
 //!
+//! **The bulge of a slice.** A rate is one number per gap, but a round
+//! structure changes fastest towards its ends. The drawn areas give each
+//! skipped slice `t` a second estimate, `κ(t)` wrong voxels per slice², from
+//! how the cross-section bulges there (`bulge_density`: zero for a cone or
+//! a cylinder, large near a pole). A skipped slice of a (sub-)gap `[p, q]`
+//! counts `max(ρ / (q − p), κ(t)) (t − p)(q − t)` wrong voxels: the larger
+//! of the two, so slices go first to the ends of a round structure, and a
+//! cone's tip, which the shape methods follow, draws none.
+//!
 //! **The level.** The model ranks the gaps; how wrong the result is overall
 //! is the leave-one-out estimate of [`crate::predict`] (the predicted Dice
 //! the tracing summary shows too, one definition for both), pooled over the
@@ -37,7 +46,7 @@
 //! `1 − E / (2V)` is the predicted Dice.
 //!
 //! Several labels share the drawn slices: a gap's rate is the sum of the
-//! labels' rates, `V` the sum of their volumes. The N best slices are chosen
+//! labels' rates (and bulges), `V` the sum of their volumes. The N best slices are chosen
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
 use crate::labels::{DrawnLabels, sorted_drawn};
@@ -77,30 +86,48 @@ pub struct Advice {
     pub volume_voxels: f64,
 }
 
-/// A gap between two drawn slices and its rate (wrong voxels per slice).
-#[derive(Debug, Clone, Copy)]
+/// A gap between two drawn slices: its rate (wrong voxels per slice) and
+/// the bulge of the structure's cross-section on each of its slices.
+#[derive(Debug, Clone)]
 struct Gap {
     a: usize,
     b: usize,
     rate: f64,
+    /// [`bulge_density`] on the slices `a..=b` (index `t − a`).
+    bulge: Vec<f64>,
 }
 
 impl Gap {
+    /// A gap without bulge: the rate alone.
+    #[cfg(test)]
+    fn flat(a: usize, b: usize, rate: f64) -> Gap {
+        Gap {
+            a,
+            b,
+            rate,
+            bulge: vec![0.0; b - a + 1],
+        }
+    }
+
     /// Expected wrong voxels over the gap with `n` more slices evenly spaced
-    /// in it (at the slices of [`Gap::spread`]): the sum over the sub-gaps of
-    /// `ρ (L² − 1) / 6`, exact for whole-slice sub-gaps (a sub-gap of one
-    /// slice has no undrawn slice, so no error).
+    /// in it (at the slices of [`Gap::spread`]): over the sub-gaps `[p, q]`,
+    /// each skipped slice `t` counts `max(ρ / (q − p), κ(t)) (t − p)(q − t)`,
+    /// `κ` the bulge. Without bulge that is `ρ (L² − 1) / 6` per sub-gap of
+    /// `L` slices (a sub-gap of one slice has no undrawn slice, so no error).
     fn error_with(&self, n: usize) -> f64 {
         let mut cuts = self.spread(n);
         cuts.sort_unstable();
         let mut prev = self.a;
         let mut sum = 0.0;
         for c in cuts.into_iter().chain([self.b]) {
-            let l = (c - prev) as f64;
-            sum += (l * l - 1.0) / 6.0;
+            let flat = self.rate / (c - prev) as f64;
+            for t in prev + 1..c {
+                let bridge = ((t - prev) * (c - t)) as f64;
+                sum += flat.max(self.bulge[t - self.a]) * bridge;
+            }
             prev = c;
         }
-        self.rate * sum
+        sum
     }
 
     /// The slices of `n` evenly spaced in the gap, the one nearest its middle
@@ -119,13 +146,14 @@ impl Gap {
 }
 
 /// Where `count` more slices do the most good: the drawn gaps get slices one
-/// at a time, each to the gap whose error it lowers most (the error of a gap
-/// falls convexly with its slices, so this allocation is optimal), and each
-/// gap's slices are spread evenly in it. With equal rates this is uniform
+/// at a time, each to the gap whose error it lowers most (without bulge the
+/// error of a gap falls convexly with its slices, and this allocation is
+/// optimal), and each gap's slices are spread evenly in it. With equal rates
+/// and no bulge this is uniform
 /// spacing; where the shape is harder to predict, the slices gather. Answers
 /// the slices with their gain (the drop of the error they make in the
 /// allocation) and their gap, best first.
-fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, Gap)> {
+fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, [usize; 2])> {
     let mut n = vec![0usize; gaps.len()];
     let mut gains: Vec<Vec<f64>> = vec![Vec::new(); gaps.len()];
     for _ in 0..count {
@@ -139,7 +167,7 @@ fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, Gap)> {
         n[i] += 1;
         gains[i].push(gain);
     }
-    let mut out: Vec<(usize, f64, Gap)> = gaps
+    let mut out: Vec<(usize, f64, [usize; 2])> = gaps
         .iter()
         .zip(&n)
         .zip(&gains)
@@ -147,21 +175,22 @@ fn allocate(gaps: &[Gap], count: usize) -> Vec<(usize, f64, Gap)> {
             g.spread(k)
                 .into_iter()
                 .zip(gains.iter().copied())
-                .map(move |(s, gain)| (s, gain, *g))
+                .map(move |(s, gain)| (s, gain, [g.a, g.b]))
         })
         .collect();
     out.sort_by(|x, y| y.1.total_cmp(&x.1).then(x.0.cmp(&y.0)));
     out
 }
 
-/// The per-gap rates, the volume and the leave-one-out estimate
-/// ([`crate::predict::estimate`]) of one label's tracing.
+/// The per-gap rates, the bulge per slice ([`bulge_density`]), the volume
+/// and the leave-one-out estimate ([`crate::predict::estimate`]) of one
+/// label's tracing.
 fn label_rates(
     mask: &Mask,
     axis: Axis,
     drawn: &[usize],
     method: &dyn Interpolator,
-) -> Result<(Vec<f64>, f64, Option<LeaveOneOut>), InterpError> {
+) -> Result<LabelModel, InterpError> {
     let slices: Vec<Vec<bool>> = drawn
         .iter()
         .map(|&d| mask.slice(axis, d).map_err(InterpError::from))
@@ -208,8 +237,82 @@ fn label_rates(
             };
             loo.max(change / (4.0 * l))
         })
-        .collect();
-    Ok((rates, volume, estimate(&errors)))
+        .collect::<Vec<f64>>();
+    Ok(LabelModel {
+        rates,
+        bulge: bulge_density(drawn, &areas),
+        volume,
+        loo: estimate(&errors),
+    })
+}
+
+/// What [`label_rates`] learns of one label.
+struct LabelModel {
+    rates: Vec<f64>,
+    bulge: Vec<f64>,
+    volume: f64,
+    loo: Option<LeaveOneOut>,
+}
+
+/// The bulge of a structure's cross-section on every slice from the first
+/// drawn slice to the last (index `t − drawn[0]`): the wrong voxels per
+/// slice² its shape alone predicts there.
+///
+/// A leave-one-out rate is one number per gap, measured between drawn
+/// slices; but a round structure changes fastest towards its ends, where an
+/// end gap has a held-out slice on one side only. Seen as a disc of radius
+/// `r` whose area `A = πr²` the interpolation carries along its chord, the
+/// wrong area on a skipped slice `t` of a gap `[a, b]` is the perimeter
+/// times the radius's departure from the chord, `2πr · |r''| (t − a)(b −
+/// t) / 2`, and `π r r'' = A''/2 − A'²/(4A)`: zero for a cone (`A ∝ z²`) or
+/// a cylinder, growing without bound towards a pole (`A ∝ R² − z²`). `A` is
+/// the parabola through the areas of the gap's two slices and the drawn
+/// slice beyond the end nearer `t` (the other one when that shows nothing).
+/// Gaps with a drawn slice that does not show the structure (it ends inside
+/// the gap, a cone to a point) have none.
+fn bulge_density(drawn: &[usize], areas: &[f64]) -> Vec<f64> {
+    let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
+    let mut out = vec![0.0; last - first + 1];
+    let n = drawn.len();
+    let shows = |i: usize| areas[i] > 0.0;
+    for g in 0..n - 1 {
+        if !shows(g) || !shows(g + 1) {
+            continue;
+        }
+        let left = (g >= 1 && shows(g - 1)).then(|| [g - 1, g, g + 1]);
+        let right = (g + 2 < n && shows(g + 2)).then(|| [g, g + 1, g + 2]);
+        let (a, b) = (drawn[g], drawn[g + 1]);
+        let floor = areas[g].min(areas[g + 1]) / 2.0;
+        for t in a + 1..b {
+            let nearer_a = t - a <= b - t;
+            let Some(fit) = (if nearer_a {
+                left.or(right)
+            } else {
+                right.or(left)
+            }) else {
+                continue;
+            };
+            let (area, slope, curve) = parabola(
+                fit.map(|i| drawn[i] as f64),
+                fit.map(|i| areas[i]),
+                t as f64,
+            );
+            out[t - first] = (curve / 2.0 - slope * slope / (4.0 * area.max(floor))).abs();
+        }
+    }
+    out
+}
+
+/// The parabola through `(z[i], y[i])` at `x`: its value, slope and
+/// (constant) second derivative.
+fn parabola(z: [f64; 3], y: [f64; 3], x: f64) -> (f64, f64, f64) {
+    // Newton's divided differences.
+    let d01 = (y[1] - y[0]) / (z[1] - z[0]);
+    let d12 = (y[2] - y[1]) / (z[2] - z[1]);
+    let c = (d12 - d01) / (z[2] - z[0]);
+    let value = y[0] + d01 * (x - z[0]) + c * (x - z[0]) * (x - z[1]);
+    let slope = d01 + c * (2.0 * x - z[0] - z[1]);
+    (value, slope, 2.0 * c)
 }
 
 /// Rank the undrawn slices of `sparse` between its outermost drawn slices:
@@ -243,19 +346,23 @@ pub fn advise(
         )));
     }
     let traced = DrawnLabels::read(sparse, axis, &drawn);
-    let per_label: Vec<(Vec<f64>, f64, Option<LeaveOneOut>)> = traced
+    let per_label: Vec<LabelModel> = traced
         .labels()
         .par_iter()
         .map(|&l| label_rates(&traced.traced_mask(l), axis, &drawn, method))
         .collect::<Result<_, _>>()?;
-    let volume: f64 = per_label.iter().map(|(_, v, _)| v).sum();
+    let volume: f64 = per_label.iter().map(|m| m.volume).sum();
+    let first = drawn[0];
     let gaps: Vec<Gap> = drawn
         .windows(2)
         .enumerate()
         .map(|(g, w)| Gap {
             a: w[0],
             b: w[1],
-            rate: per_label.iter().map(|(r, _, _)| r[g]).sum(),
+            rate: per_label.iter().map(|m| m.rates[g]).sum(),
+            bulge: (w[0]..=w[1])
+                .map(|t| per_label.iter().map(|m| m.bulge[t - first]).sum())
+                .collect(),
         })
         .collect();
     let scale = if volume > 0.0 {
@@ -269,7 +376,7 @@ pub fn advise(
     // they share the drawn slices).
     let levels: Vec<(f64, f64)> = per_label
         .iter()
-        .filter_map(|(_, _, l)| l.map(|l| l.pooled))
+        .filter_map(|m| m.loo.map(|l| l.pooled))
         .collect();
     let (predicted_dice, level) = if levels.len() == per_label.len() && !levels.is_empty() {
         let (wrong, areas) = levels
@@ -291,7 +398,7 @@ pub fn advise(
             slice,
             gain_voxels: gain * level,
             dice_gain: gain * level * scale,
-            between: [g.a, g.b],
+            between: g,
         })
         .collect();
     Ok(Advice {
@@ -358,15 +465,46 @@ mod tests {
         );
     }
 
+    /// The bulge is nothing on a cone or a cylinder (their areas, `πk²z²`
+    /// and constant, are carried exactly by a chord of the radius) and, on
+    /// a ball, `π r |r''| = π R² / r²`: least at the equator, rising towards
+    /// the poles.
+    #[test]
+    fn the_bulge_is_nothing_on_a_cone_and_grows_towards_a_balls_poles() {
+        use std::f64::consts::PI;
+        let drawn = [2usize, 6, 10, 14, 18];
+        let cone: Vec<f64> = drawn
+            .iter()
+            .map(|&z| PI * (0.5 * z as f64).powi(2))
+            .collect();
+        assert!(bulge_density(&drawn, &cone).iter().all(|&k| k < 1e-9));
+        let cylinder = vec![300.0; drawn.len()];
+        assert!(bulge_density(&drawn, &cylinder).iter().all(|&k| k == 0.0));
+        // A ball of radius 9 about z = 10 (areas of its exact sections).
+        let r2 = |z: f64| 81.0 - (z - 10.0) * (z - 10.0);
+        let ball: Vec<f64> = drawn.iter().map(|&z| PI * r2(z as f64)).collect();
+        let k = bulge_density(&drawn, &ball);
+        for t in [3usize, 5, 8, 12, 15, 17] {
+            let want = PI * 81.0 / r2(t as f64);
+            let got = k[t - drawn[0]];
+            assert!(
+                (got - want).abs() < 1e-9 * want,
+                "slice {t}: {got} against {want}"
+            );
+        }
+        assert!(k[3 - 2] > k[5 - 2] && k[5 - 2] > k[8 - 2]);
+        // A drawn slice without the structure: the gaps beside it have none.
+        let mut cut = ball.clone();
+        cut[4] = 0.0;
+        let k = bulge_density(&drawn, &cut);
+        assert!(k[15 - 2..].iter().all(|&x| x == 0.0));
+    }
+
     /// Equal rates spread the slices evenly, like uniform spacing; a gap
     /// with a higher rate gets more of them; the error falls convexly.
     #[test]
     fn slices_go_where_the_error_drops_most_and_spread_in_their_gap() {
-        let g = Gap {
-            a: 10,
-            b: 40,
-            rate: 3.0,
-        };
+        let g = Gap::flat(10, 40, 3.0);
         let drops: Vec<f64> = (0..5)
             .map(|n| g.error_with(n) - g.error_with(n + 1))
             .collect();
@@ -375,26 +513,14 @@ mod tests {
         let s: Vec<usize> = allocate(&[g], 3).iter().map(|x| x.0).collect();
         assert_eq!(s, [25, 18, 33]);
         // A gap three times as hard gets more slices than its equal twin.
-        let easy = Gap {
-            a: 0,
-            b: 20,
-            rate: 1.0,
-        };
-        let hard = Gap {
-            a: 20,
-            b: 40,
-            rate: 3.0,
-        };
+        let easy = Gap::flat(0, 20, 1.0);
+        let hard = Gap::flat(20, 40, 3.0);
         let a = allocate(&[easy, hard], 4);
         let in_hard = a.iter().filter(|x| x.0 > 20).count();
         assert!(in_hard >= 3, "{a:?}");
         assert!(a.windows(2).all(|w| w[0].1 >= w[1].1));
         // No more slices than the gaps hold.
-        let tiny = Gap {
-            a: 3,
-            b: 5,
-            rate: 1.0,
-        };
+        let tiny = Gap::flat(3, 5, 1.0);
         assert_eq!(
             allocate(&[tiny], 5).iter().map(|x| x.0).collect::<Vec<_>>(),
             [4]
