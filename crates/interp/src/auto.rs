@@ -23,7 +23,7 @@
 //! that ends inside a gap), where the tracing says the object stops.
 use crate::aligned::ShapeAligned;
 use crate::crop::AXIS_SLICES;
-use crate::loo::{Compact, HeldOut, overlap, pooled_dice};
+use crate::loo::{Compact, HeldOut};
 use crate::nearest::Nearest;
 use crate::sdf::SdfCache;
 use crate::shape_based::ShapeBased;
@@ -88,13 +88,7 @@ impl ShapeAuto {
                     compact,
                 });
             }
-            let mut acc = (0u64, 0u64);
-            for h in &held {
-                let (a, b) = overlap(&h.predicted, &compact.truth(h.pos));
-                acc.0 += a;
-                acc.1 += b;
-            }
-            scores.push(pooled_dice(acc));
+            scores.push(compact.pooled_dice(&held));
             preds.push(held);
         }
         let index = match self.extrapolated(&compact, input, &scores)? {
@@ -158,13 +152,7 @@ impl ShapeAuto {
                 if held.is_empty() {
                     return Ok(None);
                 }
-                let mut acc = (0u64, 0u64);
-                for h in &held {
-                    let (a, b) = overlap(&h.predicted, &compact.truth(h.pos));
-                    acc.0 += a;
-                    acc.1 += b;
-                }
-                Ok(Some(1.0 - pooled_dice(acc)))
+                Ok(Some(1.0 - compact.pooled_dice(&held)))
             })
             .collect();
         let mut out = Vec::with_capacity(e2.len());

@@ -68,6 +68,16 @@ impl Compact {
         self.mask.slice(self.axis, pos).expect("compact index")
     }
 
+    /// Pooled Dice of held-out predictions against the slices they predict.
+    pub fn pooled_dice(&self, held: &[HeldOut]) -> f64 {
+        let mut acc = (0u64, 0u64);
+        for h in held {
+            let (a, b) = overlap(&h.predicted, &self.truth(h.pos));
+            acc = (acc.0 + a, acc.1 + b);
+        }
+        pooled_dice(acc)
+    }
+
     /// Real slices between compact slice `pos` and its nearest kept
     /// neighbour in the leave-one-out runs (the distance the prediction spans).
     pub fn reach(&self, pos: usize) -> usize {
