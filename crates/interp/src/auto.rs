@@ -126,9 +126,11 @@ impl ShapeAuto {
     /// plain blending, behind `shape-aligned` across twice the gap, is ahead
     /// across the gap itself. So the close contenders also predict across four
     /// times the gap (every fourth drawn slice kept, the slices halfway
-    /// between scored), and each one's error `e` is carried back to the real
-    /// gap along the power law through the two spans, `e(1) = e(2)² / e(4)`
-    /// (kept at `e(2)` where the error does not grow with the span).
+    /// between scored), and each one's error `e` is carried back towards the
+    /// real gap by half the power law through the two spans,
+    /// `e(2) · √(e(2) / e(4))` (kept at `e(2)` where the error does not grow
+    /// with the span). The whole power law, `e(2)² / e(4)`, trusted the ratio
+    /// of two noisy errors too far (stardist's nuclei, `docs/interpolation.md`).
     fn extrapolated(
         &self,
         compact: &Compact,
