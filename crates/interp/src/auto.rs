@@ -68,13 +68,31 @@ impl ShapeAuto {
     /// the pooled Dice, and leaving them out makes the choice the same on
     /// the label's box ([`crate::crop`]) as on the whole volume.
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
+        self.choose_on(input, Compact::held_out)
+    }
+
+    /// The index of the candidate [`ShapeAuto::choose`] would choose,
+    /// ranked on half the held-out slices when there are many
+    /// ([`Compact::held_out_to_rank`]): what interpolating needs, where the
+    /// predictions themselves are not kept.
+    pub fn rank(&self, input: &SparseMask<'_>) -> Result<usize, InterpError> {
+        Ok(self.choose_on(input, Compact::held_out_to_rank)?.index)
+    }
+
+    /// [`ShapeAuto::choose`] with `held_out` predicting the held-out slices.
+    fn choose_on(
+        &self,
+        input: &SparseMask<'_>,
+        held_out: impl Fn(&Compact, &dyn Interpolator, &SparseMask<'_>) -> Result<Vec<HeldOut>, InterpError>
+        + Sync,
+    ) -> Result<Choice, InterpError> {
         let near = near_label(input)?;
         let compact = Compact::of(&input.on(input.mask, &near))?;
         // The candidates run side by side: each one's runs on the compact
         // stack are too small to keep every core busy on their own.
         let runs: Vec<Result<Vec<HeldOut>, InterpError>> = candidates()
             .par_iter()
-            .map(|c| compact.held_out(c.as_ref(), input))
+            .map(|c| held_out(&compact, c.as_ref(), input))
             .collect();
         let mut scores = Vec::new();
         let mut preds = Vec::new();
@@ -260,9 +278,9 @@ impl Interpolator for ShapeAuto {
                 input.with_maps(&cache)
             }
         };
-        let choice = self.choose(&input)?;
+        let index = self.rank(&input)?;
         input.check_cancelled()?;
-        candidates()[choice.index].interpolate(input)
+        candidates()[index].interpolate(input)
     }
 }
 

@@ -22,6 +22,10 @@ pub struct Compact {
     pub real: Vec<usize>,
 }
 
+/// Drawn slices from which one run of the leave-one-out ranks the methods
+/// ([`Compact::held_out_to_rank`]).
+pub const MANY_DRAWN: usize = 16;
+
 /// One held-out drawn slice and its prediction.
 pub struct HeldOut {
     /// Position in the compact stack (= in the drawn list).
@@ -109,13 +113,37 @@ impl Compact {
         like: &SparseMask<'_>,
         stride: usize,
     ) -> Result<Vec<HeldOut>, InterpError> {
+        self.held_out_runs(method, like, stride, stride)
+    }
+
+    /// [`Compact::held_out`] to rank methods: with [`MANY_DRAWN`] drawn
+    /// slices or more, only the first of its two runs (every other drawn
+    /// slice predicted, still eight or more), at half the cost. On the
+    /// development data no choice of method changed.
+    pub fn held_out_to_rank(
+        &self,
+        method: &dyn Interpolator,
+        like: &SparseMask<'_>,
+    ) -> Result<Vec<HeldOut>, InterpError> {
+        let runs = if self.real.len() >= MANY_DRAWN { 1 } else { 2 };
+        self.held_out_runs(method, like, 2, runs)
+    }
+
+    /// The first `runs` of the `stride` runs of [`Compact::held_out_at`].
+    fn held_out_runs(
+        &self,
+        method: &dyn Interpolator,
+        like: &SparseMask<'_>,
+        stride: usize,
+        runs: usize,
+    ) -> Result<Vec<HeldOut>, InterpError> {
         let n = self.real.len();
         if n < stride + 1 {
             return Ok(Vec::new());
         }
         let half = stride / 2;
         let mut out = Vec::new();
-        for offset in 0..stride {
+        for offset in 0..runs.min(stride) {
             let kept: Vec<usize> = (0..n)
                 .filter(|&i| i % stride == offset || i == 0 || i == n - 1)
                 .collect();

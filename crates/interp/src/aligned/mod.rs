@@ -368,20 +368,18 @@ fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usi
     let (na, nb) = (a.comps.len(), b.comps.len());
     let mut uf: UnionFind<usize> = UnionFind::new(na + nb);
     let mut linked = vec![false; na + nb];
-    // Overlap.
-    let mut pairs: Vec<(u32, u32)> = a
-        .ids
-        .iter()
-        .zip(&b.ids)
-        .filter(|&(&x, &y)| x > 0 && y > 0)
-        .map(|(&x, &y)| (x - 1, y - 1))
-        .collect();
-    pairs.sort_unstable();
-    pairs.dedup();
-    for &(x, y) in &pairs {
-        uf.union(x as usize, na + y as usize);
-        linked[x as usize] = true;
-        linked[na + y as usize] = true;
+    // Overlap. Neighbouring pixels mostly repeat the pair before them; a
+    // union is idempotent, so only a change of pair does any work.
+    let mut last = (0u32, 0u32);
+    for (&x, &y) in a.ids.iter().zip(&b.ids) {
+        if x == 0 || y == 0 || (x, y) == last {
+            continue;
+        }
+        last = (x, y);
+        let (x, y) = (x as usize - 1, na + y as usize - 1);
+        uf.union(x, y);
+        linked[x] = true;
+        linked[y] = true;
     }
     // Mutual nearest among the unlinked, in physical units.
     let radius = |c: &Component| {
