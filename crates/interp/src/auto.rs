@@ -83,7 +83,11 @@ impl ShapeAuto {
     fn choose_on(
         &self,
         input: &SparseMask<'_>,
-        held_out: impl Fn(&Compact, &dyn Interpolator, &SparseMask<'_>) -> Result<Vec<HeldOut>, InterpError>
+        held_out: impl Fn(
+            &Compact,
+            &dyn Interpolator,
+            &SparseMask<'_>,
+        ) -> Result<Vec<HeldOut>, InterpError>
         + Sync,
     ) -> Result<Choice, InterpError> {
         let near = near_label(input)?;
