@@ -164,7 +164,15 @@ pub fn squared_edt_2d_as<S: EdtValue>(
                     (q, d * d * sv2)
                 }),
         );
-        env.evaluate_sorted(0..width, |p, x| orow[p] = S::from_f64(x));
+        // A feature pixel is at distance 0: only the others read the envelope.
+        for (o, &d) in orow.iter_mut().zip(grow) {
+            if d == 0 {
+                *o = S::from_f64(0.0);
+            }
+        }
+        env.evaluate_sorted((0..width).filter(|&p| grow[p] != 0), |p, x| {
+            orow[p] = S::from_f64(x)
+        });
     }
     out
 }
