@@ -245,6 +245,49 @@ fn labels_on(planes: &[Vec<u16>]) -> Vec<u16> {
     (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect()
 }
 
+/// The labels on `plane` (`w` pixels a row), ascending, each with its
+/// extent `[u_lo, u_hi, v_lo, v_hi]`. `slot` is a table of `u32::MAX` for
+/// every label value, handed back as it came: it maps a label met on this
+/// plane to its entry, so a label's runs are found without a search.
+fn plane_extents(plane: &[u16], w: usize, slot: &mut [u32]) -> Vec<(u16, [usize; 4])> {
+    let mut found: Vec<(u16, Option<[usize; 4]>)> = Vec::new();
+    for (v, row) in plane.chunks_exact(w).enumerate() {
+        if all_zero(row) {
+            continue;
+        }
+        // Runs of one label: their first and last pixels bound the extent.
+        let mut u = 0;
+        while u < w {
+            let l = row[u];
+            let start = u;
+            while u < w && row[u] == l {
+                u += 1;
+            }
+            if l == 0 {
+                continue;
+            }
+            let k = match slot[l as usize] {
+                u32::MAX => {
+                    slot[l as usize] = found.len() as u32;
+                    found.push((l, None));
+                    found.len() - 1
+                }
+                k => k as usize,
+            };
+            grow_extent(&mut found[k].1, start, v);
+            grow_extent(&mut found[k].1, u - 1, v);
+        }
+    }
+    for &(l, _) in &found {
+        slot[l as usize] = u32::MAX;
+    }
+    found.sort_unstable_by_key(|&(l, _)| l);
+    found
+        .into_iter()
+        .map(|(l, e)| (l, e.expect("a run was found")))
+        .collect()
+}
+
 /// Whether every value of `run` is 0 (an OR over the run, which the
 /// compiler vectorises, rather than a test per value).
 fn all_zero(run: &[u16]) -> bool {
@@ -318,26 +361,22 @@ impl DrawnLabels {
                 "drawn slices do not fit a {w}x{h} plane with {n} slices along {axis}"
             )));
         }
-        let labels = labels_on(&planes);
-        let mut index = vec![u32::MAX; 65536];
-        for (i, &l) in labels.iter().enumerate() {
-            index[l as usize] = i as u32;
-        }
-        let extents = planes
+        // Each plane is read once, in parallel: its labels and their extents.
+        let found: Vec<Vec<(u16, [usize; 4])>> = planes
             .par_iter()
-            .map(|p| {
-                let mut e: Vec<Option<[usize; 4]>> = vec![None; labels.len()];
-                for (v, row) in p.chunks_exact(w).enumerate() {
-                    if all_zero(row) {
-                        continue;
-                    }
-                    for (u, &l) in row.iter().enumerate().filter(|(_, l)| **l != 0) {
-                        grow_extent(&mut e[index[l as usize] as usize], u, v);
-                    }
-                }
-                e.into_iter()
-                    .enumerate()
-                    .filter_map(|(i, x)| Some((i, x?)))
+            .map_init(
+                || vec![u32::MAX; 65536],
+                |slot, p| plane_extents(p, w, slot),
+            )
+            .collect();
+        let mut labels: Vec<u16> = found.iter().flatten().map(|&(l, _)| l).collect();
+        labels.sort_unstable();
+        labels.dedup();
+        let extents = found
+            .into_iter()
+            .map(|f| {
+                f.into_iter()
+                    .map(|(l, e)| (labels.binary_search(&l).expect("a label found"), e))
                     .collect()
             })
             .collect();
