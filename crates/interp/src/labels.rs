@@ -204,8 +204,7 @@ pub fn sorted_drawn(
 /// interpolating a volume that may be an intensity image). `drawn` must be
 /// valid indices along `axis`.
 pub fn drawn_labels(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<u16> {
-    let planes = read_planes(sparse, axis, drawn);
-    labels_on(&planes)
+    DrawnLabels::read(sparse, axis, drawn).labels
 }
 
 /// The drawn slices of `sparse` along `axis`, row-major.
@@ -214,35 +213,6 @@ fn read_planes(sparse: &LabelVolume, axis: Axis, drawn: &[usize]) -> Vec<Vec<u16
         .par_iter()
         .map(|&d| sparse.slice(axis, d).expect("validated drawn index"))
         .collect()
-}
-
-/// The labels on any of `planes`, ascending.
-fn labels_on(planes: &[Vec<u16>]) -> Vec<u16> {
-    // Which values occur, per slice in parallel (a plain store per pixel:
-    // setting bits would chain every pixel through one word).
-    // A traced slice is mostly background: runs of zeros are skipped after
-    // one vectorised test each. Few slices per task keep the per-task table
-    // from being cleared more often than the slices are read.
-    let seen = planes
-        .par_iter()
-        .with_min_len(8)
-        .fold(
-            || vec![false; 65536],
-            |mut seen, p| {
-                for run in p.chunks(64).filter(|r| !all_zero(r)) {
-                    run.iter().for_each(|&v| seen[v as usize] = true);
-                }
-                seen
-            },
-        )
-        .reduce(
-            || vec![false; 65536],
-            |mut a, b| {
-                a.iter_mut().zip(&b).for_each(|(x, y)| *x |= y);
-                a
-            },
-        );
-    (1..65536).filter(|&l| seen[l]).map(|l| l as u16).collect()
 }
 
 /// The labels on `plane` (`w` pixels a row), ascending, each with its
