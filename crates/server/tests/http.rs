@@ -495,11 +495,13 @@ fn openapi_document_lists_every_route() {
             .replace("{index}", "0")
             .replace("{id}", "999999")
             .replace("{result}", "999999");
-        let body = if m == "GET" || m == "DELETE" {
-            None
-        } else {
-            Some((&b"{}"[..], "application/json"))
-        };
+        // A body only where the document declares one: a body the server
+        // never reads makes it close the keep-alive connection, and the
+        // next request could race that close.
+        let takes_body = paths[path.as_str()][m.to_ascii_lowercase()]
+            .get("requestBody")
+            .is_some();
+        let body = takes_body.then_some((&b"{}"[..], "application/json"));
         let a = c.send(m, &url, body).unwrap();
         assert_ne!(a.status, 405, "{m} {path}");
         if a.status == 404 {
