@@ -180,6 +180,129 @@ pub fn squared_edt_2d_as<S: EdtValue>(
     out
 }
 
+/// Signed Euclidean distance (physical units) of a binary slice: on a `true`
+/// pixel minus the distance to the nearest `false` pixel, on a `false` pixel
+/// the distance to the nearest `true` one, so that `d < 0` is exactly the
+/// mask. Infinite where the other class is absent from the slice (callers
+/// that need finite values treat empty and full slices themselves).
+///
+/// Each value equals the square root of [`squared_edt_2d_f32`]'s on the
+/// mask (for `false` pixels) or on its complement (for `true` pixels), but
+/// the two transforms share their work:
+/// - one pass along the columns finds, for every pixel, the distance to the
+///   nearest pixel *of the other class* in its column, which is the column
+///   distance each transform reads at the pixels it does not take as
+///   features;
+/// - along each row, the envelope of the distance to one class holds that
+///   class's runs by their two ends only (from a run of feature pixels, the
+///   nearest to any pixel outside it is one of its ends) and is evaluated
+///   on the other class's runs only.
+///
+/// So every pixel is read once by one envelope instead of by two.
+///
+/// # Panics
+/// If `mask.len() != width * height` (a programming error).
+// Also compiled for AVX2 and chosen at run time (the results are the same:
+// no fused multiply-add).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+pub fn signed_edt_2d_f32(
+    mask: &[bool],
+    width: usize,
+    height: usize,
+    spacing: [f64; 2],
+) -> Vec<f32> {
+    assert_eq!(
+        mask.len(),
+        width * height,
+        "mask length must be width * height"
+    );
+    let mut out = vec![f32::INFINITY; mask.len()];
+    if width == 0 || height == 0 {
+        return out;
+    }
+    // Pixels to the nearest pixel of the other class in the column; NONE
+    // when there is none. Down the rows (the other class above), then up.
+    const NONE: u32 = u32::MAX;
+    let mut g = vec![NONE; mask.len()];
+    for v in 1..height {
+        let row = v * width;
+        let (done, rest) = g.split_at_mut(row);
+        let above = &done[row - width..];
+        let (m_above, m_cur) = (&mask[row - width..row], &mask[row..row + width]);
+        for (((c, &p), &a), &b) in rest[..width].iter_mut().zip(above).zip(m_above).zip(m_cur) {
+            *c = if a != b { 1 } else { p.saturating_add(1) };
+        }
+    }
+    for v in (0..height - 1).rev() {
+        let row = v * width;
+        let (cur, below) = g[row..].split_at_mut(width);
+        let (m_cur, m_below) = (&mask[row..row + width], &mask[row + width..row + 2 * width]);
+        for (((c, &b), &x), &y) in cur.iter_mut().zip(&below[..width]).zip(m_cur).zip(m_below) {
+            let down = if x != y { 1 } else { b.saturating_add(1) };
+            *c = (*c).min(down);
+        }
+    }
+    let (su2, sv2) = (spacing[0] * spacing[0], spacing[1] * spacing[1]);
+    let mut to_true = LowerEnvelope::with_capacity(width);
+    let mut to_false = LowerEnvelope::with_capacity(width);
+    // Runs of one class along the row: `[a, b)` and the class.
+    let mut runs: Vec<(usize, usize, bool)> = Vec::new();
+    // The samples of the envelopes of the distance to `true` and to `false`.
+    let mut of_true: Vec<(usize, f64)> = Vec::with_capacity(width);
+    let mut of_false: Vec<(usize, f64)> = Vec::with_capacity(width);
+    for ((mrow, grow), orow) in mask
+        .chunks(width)
+        .zip(g.chunks(width))
+        .zip(out.chunks_mut(width))
+    {
+        runs.clear();
+        of_true.clear();
+        of_false.clear();
+        let mut a = 0;
+        while a < width {
+            let c = mrow[a];
+            let b = mrow[a..]
+                .iter()
+                .position(|&x| x != c)
+                .map_or(width, |n| a + n);
+            runs.push((a, b, c));
+            // The run's ends are features of its class's envelope; its
+            // pixels, at their column distance, samples of the other one.
+            let (ends, body) = if c {
+                (&mut of_true, &mut of_false)
+            } else {
+                (&mut of_false, &mut of_true)
+            };
+            ends.push((a, 0.0));
+            if b - a > 1 {
+                ends.push((b - 1, 0.0));
+            }
+            for (q, &d) in grow.iter().enumerate().take(b).skip(a) {
+                if d != NONE {
+                    let d = f64::from(d);
+                    body.push((q, d * d * sv2));
+                }
+            }
+            a = b;
+        }
+        to_true.build_from(width, su2, of_true.iter().copied());
+        to_false.build_from(width, su2, of_false.iter().copied());
+        let (mut near_true, mut near_false) = (to_true.cursor(), to_false.cursor());
+        for &(a, b, c) in &runs {
+            if c {
+                for (p, o) in orow.iter_mut().enumerate().take(b).skip(a) {
+                    *o = -(near_false.value(p) as f32).sqrt();
+                }
+            } else {
+                for (p, o) in orow.iter_mut().enumerate().take(b).skip(a) {
+                    *o = (near_true.value(p) as f32).sqrt();
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Generic 3D transform.
 pub fn squared_edt_3d_as<S: EdtValue>(
     features: &[bool],
@@ -438,7 +561,7 @@ impl LowerEnvelope {
         let mut top = Parabola::default();
         for (q, h) in samples {
             debug_assert!(h.is_finite());
-            let q = q as f64;
+            let q = position(q);
             let a = h + s2 * q * q;
             // Pop the parabolas that q hides: the breakpoint of q with the last
             // one, (a - a_p) / (2 s² (q - p)), is at or before the last one's own
@@ -482,29 +605,65 @@ impl LowerEnvelope {
         ps: impl IntoIterator<Item = usize>,
         mut f: impl FnMut(usize, f64),
     ) {
-        let env = &self.parabolas[..self.len];
-        let Some(first) = env.first() else {
-            for p in ps {
-                f(p, f64::INFINITY);
-            }
-            return;
-        };
-        let mut k = 0;
-        let mut cur = *first;
+        let mut at = self.cursor();
         for p in ps {
-            let pf = p as f64;
-            // Advance while the next parabola starts before p.
-            while let Some(next) = env.get(k + 1) {
-                if next.num < pf * next.den {
-                    k += 1;
-                    cur = *next;
-                } else {
-                    break;
-                }
-            }
-            let d = pf - cur.q;
-            f(p, self.s2 * d * d + cur.h);
+            f(p, at.value(p));
         }
+    }
+
+    /// A reader of the envelope at ascending positions.
+    #[inline]
+    pub fn cursor(&self) -> EnvelopeCursor<'_> {
+        let env = &self.parabolas[..self.len];
+        EnvelopeCursor {
+            env,
+            k: 0,
+            cur: env.first().copied(),
+            s2: self.s2,
+        }
+    }
+}
+
+/// A position along a line as a float. Lines are far shorter than 2³²
+/// samples, and a 32-bit integer converts in one instruction where a
+/// 64-bit unsigned one takes several (this is in the innermost loops).
+#[inline]
+fn position(p: usize) -> f64 {
+    debug_assert!(p <= u32::MAX as usize);
+    f64::from(p as u32)
+}
+
+/// Reads a [`LowerEnvelope`] at ascending positions: each read moves on
+/// from the parabola of the previous one, so reading a whole line costs one
+/// pass over the envelope.
+pub struct EnvelopeCursor<'a> {
+    env: &'a [Parabola],
+    /// The parabola lowest at the last position read, and its index.
+    k: usize,
+    cur: Option<Parabola>,
+    s2: f64,
+}
+
+impl EnvelopeCursor<'_> {
+    /// The envelope at `p`, at or after every earlier position read
+    /// (infinite for an envelope without parabolas).
+    #[inline]
+    pub fn value(&mut self, p: usize) -> f64 {
+        let Some(cur) = self.cur.as_mut() else {
+            return f64::INFINITY;
+        };
+        let pf = position(p);
+        // Advance while the next parabola starts before p.
+        while let Some(next) = self.env.get(self.k + 1) {
+            if next.num < pf * next.den {
+                self.k += 1;
+                *cur = *next;
+            } else {
+                break;
+            }
+        }
+        let d = pf - cur.q;
+        self.s2 * d * d + cur.h
     }
 }
 
@@ -623,6 +782,30 @@ mod tests {
             let g32 = squared_edt_2d_f32(&f, w, h, s);
             for (g, e) in g32.iter().zip(&want) {
                 prop_assert!(close(f64::from(*g), *e, 1e-6));
+            }
+        }
+
+        #[test]
+        fn signed_edt_2d_is_the_distance_to_the_other_class(
+            (w, h, mut f, s, mode) in grid_2d(),
+            dense in 0.0f64..1.0,
+        ) {
+            apply_mode(&mut f, mode);
+            // Masks of every density, so that rows hold long runs of both
+            // classes (the envelopes keep only a run's ends).
+            if mode == 0 {
+                for (n, x) in f.iter_mut().enumerate() {
+                    *x |= ((n * 7919) % 1000) as f64 / 1000.0 < dense;
+                }
+            }
+            let got = signed_edt_2d_f32(&f, w, h, s);
+            let to_true = brute_2d(&f, w, h, s);
+            let not: Vec<bool> = f.iter().map(|&x| !x).collect();
+            let to_false = brute_2d(&not, w, h, s);
+            for n in 0..w * h {
+                let want = if f[n] { -to_false[n].sqrt() } else { to_true[n].sqrt() };
+                prop_assert!(close(f64::from(got[n]), want, 1e-6), "pixel {n}: {} vs {want}", got[n]);
+                prop_assert_eq!(got[n] < 0.0, f[n], "pixel {}: the sign is the mask", n);
             }
         }
 

@@ -2,7 +2,7 @@
 //! methods (Raya & Udupa 1990; Herman et al. 1992).
 use crate::slices::Plane;
 use crate::{InterpError, SparseMask};
-use interslice_core::edt::squared_edt_2d_f32;
+use interslice_core::edt::signed_edt_2d_f32;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -15,56 +15,15 @@ use std::sync::Arc;
 /// A slice without foreground gets `empty_value()` everywhere (a finite
 /// "far outside", so that blending stays arithmetic), and a slice without
 /// background gets its negative.
-// Also compiled for AVX2 and chosen at run time: its row loops vectorise
-// twice as wide (the results are the same: no fused multiply-add).
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn signed_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
-    let (w, h) = (plane.width, plane.height);
     let far = empty_value(plane);
-    // The foreground's box `[u0, v0, u1, v1)`.
-    let mut bb = [usize::MAX, usize::MAX, 0, 0];
-    for (v, row) in mask.chunks(w).enumerate() {
-        if let (Some(a), Some(b)) = (row.iter().position(|&m| m), row.iter().rposition(|&m| m)) {
-            bb = [bb[0].min(a), bb[1].min(v), bb[2].max(b + 1), v + 1];
-        }
-    }
-    if bb[2] == 0 {
+    if !mask.iter().any(|&m| m) {
         return vec![far; mask.len()];
     }
-    if !mask.iter().any(|&m| !m) {
+    if mask.iter().all(|&m| m) {
         return vec![-far; mask.len()];
     }
-    // The inside distances are computed on the foreground's box grown by one
-    // pixel: the background pixel nearest to a foreground pixel lies there
-    // (any farther one, moved onto the ring around the box, is background
-    // and nearer), so the transform of that crop is the whole slice's there.
-    let (cu0, cv0) = (bb[0].saturating_sub(1), bb[1].saturating_sub(1));
-    let (cu1, cv1) = ((bb[2] + 1).min(w), (bb[3] + 1).min(h));
-    let cw = cu1 - cu0;
-    let (outside, inside) = rayon::join(
-        || squared_edt_2d_f32(mask, w, h, plane.spacing),
-        || {
-            let bg: Vec<bool> = (cv0..cv1)
-                .flat_map(|v| mask[cu0 + w * v..cu1 + w * v].iter().map(|&m| !m))
-                .collect();
-            squared_edt_2d_f32(&bg, cw, cv1 - cv0, plane.spacing)
-        },
-    );
-    let mut out: Vec<f32> = outside.iter().map(|&o| o.sqrt()).collect();
-    for v in cv0..cv1 {
-        let row = cu0 + w * v;
-        let crop = &inside[cw * (v - cv0)..cw * (v - cv0 + 1)];
-        for ((o, &m), &i) in out[row..row + cw]
-            .iter_mut()
-            .zip(&mask[row..row + cw])
-            .zip(crop)
-        {
-            if m {
-                *o = -i.sqrt();
-            }
-        }
-    }
-    out
+    signed_edt_2d_f32(mask, plane.width, plane.height, plane.spacing)
 }
 
 /// The signed distance maps of a label's drawn slices, computed once and
