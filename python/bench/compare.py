@@ -12,7 +12,10 @@ of each library's time to interslice's, on the same arrays:
 * interpolation of a phantom nucleus traced on every 5th z slice (--skip):
   ``interslice.interpolate`` against ITK's morphological contour
   interpolation and a plain scipy signed-distance blend (the approach of the
-  existing napari plugins), with the Dice of each against the truth.
+  existing napari plugins), with the Dice of each against the truth. The
+  default method and ITK's are timed in five alternating rounds, so that
+  their ratio is taken under the same load of the machine (whose speed
+  drifts by a fifth over seconds here).
 
 SimpleITK, ITK, torch (MONAI) and interslice (rayon) get the same number of
 threads (--threads, default: every core); numpy, scipy, medpy and
@@ -65,7 +68,8 @@ from blobs import SPACING_XYZ, checked_pair  # noqa: E402
 SP_ZYX = tuple(reversed(SPACING_XYZ))
 
 
-def timed(fn, reps):
+def run_times(fn, reps):
+    """(the times of up to `reps` runs of fn, its last result)."""
     ts, val = [], None
     for _ in range(reps):
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
@@ -74,6 +78,12 @@ def timed(fn, reps):
             ts.append(time.perf_counter() - t0)
         if ts[0] > 60:  # one run of a slow library is enough
             break
+    return ts, val
+
+
+def timed(fn, reps):
+    """(median seconds of up to `reps` runs of fn, its last result)."""
+    ts, val = run_times(fn, reps)
     return statistics.median(ts), val
 
 
@@ -263,44 +273,66 @@ def sdf_blend(sparse_zyx, drawn, sp_zyx):
     return out
 
 
-#: Run in a child process by ``itk_mci``: the ``itk`` package and SimpleITK
+#: Run in a child process by ``ItkMci``: the ``itk`` package and SimpleITK
 #: each carry their own copy of ITK, and the two in one process corrupt the
-#: heap when the interpreter exits.
+#: heap when the interpreter exits. Each line on stdin asks for that many
+#: timed runs; their times come back as one line.
 ITK_CHILD = """
-import statistics, sys, time
+import sys, time
 import numpy as np
 import itk
 itk.MultiThreaderBase.SetGlobalDefaultNumberOfThreads(int(sys.argv[2]))
 a = np.load(sys.argv[1])
-ts = []
-for _ in range(int(sys.argv[3])):
-    t0 = time.perf_counter()
-    f = itk.MorphologicalContourInterpolator.New(itk.image_from_array(a))
-    f.SetAxis(2)
-    f.Update()
-    out = itk.array_from_image(f.GetOutput()) != 0
-    ts.append(time.perf_counter() - t0)
-    if ts[0] > 60:
-        break
+out = None
+print("ready", flush=True)
+for line in sys.stdin:
+    ts = []
+    for _ in range(int(line)):
+        t0 = time.perf_counter()
+        f = itk.MorphologicalContourInterpolator.New(itk.image_from_array(a))
+        f.SetAxis(2)
+        f.Update()
+        out = itk.array_from_image(f.GetOutput()) != 0
+        ts.append(time.perf_counter() - t0)
+    print(" ".join(map(str, ts)), flush=True)
 np.save(sys.argv[1], out)
-print(statistics.median(ts))
 """
 
 
-def itk_mci(sparse_zyx, reps):
-    """(median seconds, result) of ITK's morphological contour interpolation
-    along z, timed inside a child process (see ``ITK_CHILD``)."""
-    import subprocess
-    import tempfile
+class ItkMci:
+    """ITK's morphological contour interpolation along z, timed in a child
+    process (see ``ITK_CHILD``) in rounds the caller asks for, so that its
+    runs can alternate with interslice's: the two are then timed under the
+    same load of the machine, which drifts over seconds."""
 
-    with tempfile.TemporaryDirectory() as d:
-        path = os.path.join(d, "sparse.npy")
-        np.save(path, np.ascontiguousarray(sparse_zyx.astype(np.uint8)))
-        r = subprocess.run(
-            [sys.executable, "-c", ITK_CHILD, path, str(args.threads), str(reps)],
-            capture_output=True, text=True, check=True,
+    def __init__(self, sparse_zyx):
+        import subprocess
+        import tempfile
+
+        self.dir = tempfile.TemporaryDirectory()
+        self.path = os.path.join(self.dir.name, "sparse.npy")
+        np.save(self.path, np.ascontiguousarray(sparse_zyx.astype(np.uint8)))
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", ITK_CHILD, self.path, str(args.threads)],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         )
-        return float(r.stdout.split()[-1]), np.load(path)
+        if self.proc.stdout.readline().strip() != "ready":
+            raise RuntimeError(self.proc.communicate()[1].strip().splitlines()[-1:])
+
+    def run(self, reps):
+        """Times of `reps` runs."""
+        self.proc.stdin.write(f"{reps}\n")
+        self.proc.stdin.flush()
+        return [float(t) for t in self.proc.stdout.readline().split()]
+
+    def result(self):
+        """The last run's mask; ends the child."""
+        _, err = self.proc.communicate()
+        if self.proc.returncode != 0:
+            raise RuntimeError(err.strip().splitlines()[-1:])
+        out = np.load(self.path)
+        self.dir.cleanup()
+        return out
 
 
 def dice(a, b):
@@ -319,18 +351,33 @@ def interpolation_section():
     sparse[drawn] = truth[drawn]
     sp = meta["spacing"]
     t = Table("interpolation")
-    for i, method in enumerate([None, "shape-based"]):
-        name = method or interslice.DEFAULT_METHOD
-        s, out = timed(lambda m=method: interslice.interpolate(sparse.T, drawn=drawn, axis=2, spacing=sp, method=m), args.reps)
-        if i == 0:
-            base = s
-            t.add(f"interslice.interpolate ({name})", s, f"Dice {dice(out.T, truth):.4f}")
-        else:
-            t.add(f"interslice.interpolate ({name})", s, f"Dice {dice(out.T, truth):.4f}", base)
+
+    def ours(method=None):
+        return interslice.interpolate(sparse.T, drawn=drawn, axis=2, spacing=sp, method=method)
+
+    # The default and ITK MCI alternate in rounds (ITK in its child process),
+    # so that their ratio is taken under the same load of the machine.
+    itk = None
     if importlib.util.find_spec("itk") is not None:
         try:
-            s, out = itk_mci(sparse, args.reps)
-            t.add("ITK MorphologicalContourInterpolator", s, f"Dice {dice(out, truth):.4f}", base)
+            itk = ItkMci(sparse)
+        except Exception as e:  # noqa: BLE001
+            print(f"  ITK morphological contour interpolation failed: {e}")
+    rounds = min(5, args.reps)
+    ours_ts, itk_ts = [], []
+    for r in range(rounds):
+        n = args.reps // rounds + (r < args.reps % rounds)
+        ts, out = run_times(ours, n)
+        ours_ts += ts
+        if itk is not None:
+            itk_ts += itk.run(n)
+    base = statistics.median(ours_ts)
+    t.add(f"interslice.interpolate ({interslice.DEFAULT_METHOD})", base, f"Dice {dice(out.T, truth):.4f}")
+    s, out = timed(lambda: ours("shape-based"), args.reps)
+    t.add("interslice.interpolate (shape-based)", s, f"Dice {dice(out.T, truth):.4f}", base)
+    if itk is not None:
+        try:
+            t.add("ITK MorphologicalContourInterpolator", statistics.median(itk_ts), f"Dice {dice(itk.result(), truth):.4f}", base)
         except Exception as e:  # noqa: BLE001
             print(f"  ITK morphological contour interpolation failed: {e}")
     if optional("scipy") is not None:
