@@ -13,9 +13,9 @@ of each library's time to interslice's, on the same arrays:
   ``interslice.interpolate`` against ITK's morphological contour
   interpolation and a plain scipy signed-distance blend (the approach of the
   existing napari plugins), with the Dice of each against the truth. The
-  default method and ITK's are timed in five alternating rounds, so that
-  their ratio is taken under the same load of the machine (whose speed
-  drifts by a fifth over seconds here).
+  default method and ITK's are timed in five alternating rounds, each
+  after two untimed runs, so that their ratio is taken under the same load
+  of the machine (whose speed drifts by a fifth over seconds here).
 
 SimpleITK, ITK, torch (MONAI) and interslice (rayon) get the same number of
 threads (--threads, default: every core); numpy, scipy, medpy and
@@ -276,7 +276,8 @@ def sdf_blend(sparse_zyx, drawn, sp_zyx):
 #: Run in a child process by ``ItkMci``: the ``itk`` package and SimpleITK
 #: each carry their own copy of ITK, and the two in one process corrupt the
 #: heap when the interpreter exits. Each line on stdin asks for that many
-#: timed runs; their times come back as one line.
+#: timed runs, after ``WARM_UP`` untimed ones; their times come back as one
+#: line.
 ITK_CHILD = """
 import sys, time
 import numpy as np
@@ -287,16 +288,24 @@ out = None
 print("ready", flush=True)
 for line in sys.stdin:
     ts = []
-    for _ in range(int(line)):
+    for i in range(int(sys.argv[3]) + int(line)):
         t0 = time.perf_counter()
         f = itk.MorphologicalContourInterpolator.New(itk.image_from_array(a))
         f.SetAxis(2)
         f.Update()
         out = itk.array_from_image(f.GetOutput()) != 0
-        ts.append(time.perf_counter() - t0)
+        if i >= int(sys.argv[3]):
+            ts.append(time.perf_counter() - t0)
     print(" ".join(map(str, ts)), flush=True)
 np.save(sys.argv[1], out)
 """
+
+
+#: Untimed runs at the start of each round, on either side: the first two
+#: calls after the other side's round run up to twice as slow (seen with
+#: pauses of up to 3 s between rounds), which is the machine settling, not
+#: the method.
+WARM_UP = 2
 
 
 class ItkMci:
@@ -313,7 +322,7 @@ class ItkMci:
         self.path = os.path.join(self.dir.name, "sparse.npy")
         np.save(self.path, np.ascontiguousarray(sparse_zyx.astype(np.uint8)))
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", ITK_CHILD, self.path, str(args.threads)],
+            [sys.executable, "-c", ITK_CHILD, self.path, str(args.threads), str(WARM_UP)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         )
         if self.proc.stdout.readline().strip() != "ready":
@@ -367,6 +376,7 @@ def interpolation_section():
     ours_ts, itk_ts = [], []
     for r in range(rounds):
         n = args.reps // rounds + (r < args.reps % rounds)
+        run_times(ours, WARM_UP)
         ts, out = run_times(ours, n)
         ours_ts += ts
         if itk is not None:

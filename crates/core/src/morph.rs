@@ -63,17 +63,16 @@ fn runs_of(data: &[bool], dims: [usize; 3], value: bool) -> Runs {
             let mut span = Vec::new();
             for row in slab.chunks(nx) {
                 let before = span.len();
+                // Each run found by two searches (start, then end): tight
+                // loops over the row, one comparison per pixel.
                 let mut i = 0;
-                while i < nx {
-                    if row[i] == value {
-                        let s = i;
-                        while i < nx && row[i] == value {
-                            i += 1;
-                        }
-                        span.push((s as u32, i as u32));
-                    } else {
-                        i += 1;
-                    }
+                while let Some(n) = row[i..].iter().position(|&x| x == value) {
+                    let s = i + n;
+                    i = row[s..]
+                        .iter()
+                        .position(|&x| x != value)
+                        .map_or(nx, |n| s + n);
+                    span.push((s as u32, i as u32));
                 }
                 counts.push(span.len() - before);
             }

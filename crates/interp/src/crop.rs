@@ -326,13 +326,22 @@ impl LabelBox {
             .for_each(|(plane, box_plane)| {
                 for (j, row) in box_plane.chunks(nx).enumerate() {
                     let start = self.lo[0] + gx * (self.lo[1] + j);
-                    for (o, &inside) in plane[start..start + nx].iter_mut().zip(row) {
-                        // A select of two values, not a branch.
-                        let was = *o;
-                        *o = if inside { value } else { was };
-                    }
+                    paint_row(&mut plane[start..start + nx], row, value);
                 }
             });
+    }
+}
+
+/// Set `value` in `out` wherever `inside` is. A function of its own: slices
+/// handed to a function are known not to overlap, which lets the compiler
+/// run the loop on vector lanes; taken from the tuple a parallel iterator
+/// passes, they were not, and the loop ran one voxel at a time.
+#[inline]
+fn paint_row<T: Voxel>(out: &mut [T], inside: &[bool], value: T) {
+    for (o, &inside) in out.iter_mut().zip(inside) {
+        // A select of two values, not a branch.
+        let was = *o;
+        *o = if inside { value } else { was };
     }
 }
 

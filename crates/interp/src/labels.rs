@@ -419,9 +419,10 @@ impl DrawnLabels {
                 let (u0, v0) = (u0.saturating_sub(1), v0.saturating_sub(1));
                 let (u1, v1) = ((u1 + 1).min(w - 1), (v1 + 1).min(h - 1));
                 let cw = u1 - u0 + 1;
-                let crop: Vec<u16> = (v0..=v1)
-                    .flat_map(|v| p[u0 + w * v..=u1 + w * v].iter().copied())
-                    .collect();
+                let mut crop: Vec<u16> = Vec::with_capacity(cw * (v1 - v0 + 1));
+                for v in v0..=v1 {
+                    crop.extend_from_slice(&p[u0 + w * v..=u1 + w * v]);
+                }
                 let g = Geometry::new([cw, v1 - v0 + 1, 1], [1.0; 3], Default::default())
                     .expect("crop of a valid slice");
                 let crop = Volume::from_vec(g, crop).expect("crop size");

@@ -2,8 +2,10 @@
 //! that shows it (a sphere through that cross-section, or through it and
 //! the one behind), for the end of an object inside a gap and at the
 //! outermost drawn slices.
-use super::{Crop, Drawn};
+use super::{Crop, Drawn, group_bbox};
 use crate::slices::Plane;
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 /// How the cross-section of an object that ends changes past the last drawn
 /// slice showing it: the sphere through that cross-section (equivalent
@@ -102,6 +104,32 @@ impl Cap {
 /// gives about the sphere of radius `r`; one near a pole reaches farther,
 /// towards both empty slices.
 pub(super) fn single_slice_centres(r: f64, toward: f64, away: f64) -> (f64, f64) {
+    // The search below takes about a million operations, and a fragmented
+    // slice (tissue classes, foam) has hundreds of objects seen on one drawn
+    // slice, most of a few pixels: equal areas in equal gaps ask the same
+    // question. Each thread keeps the answers it gave (exactly these
+    // arguments, so the same result), up to `MEMO` of them.
+    const MEMO: usize = 4096;
+    thread_local! {
+        static ANSWERS: RefCell<HashMap<[u64; 3], (f64, f64)>> = RefCell::new(HashMap::new());
+    }
+    let key = [r.to_bits(), toward.to_bits(), away.to_bits()];
+    if let Some(a) = ANSWERS.with(|m| m.borrow().get(&key).copied()) {
+        return a;
+    }
+    let answer = search_centres(r, toward, away);
+    ANSWERS.with(|m| {
+        let mut m = m.borrow_mut();
+        if m.len() >= MEMO {
+            m.clear();
+        }
+        m.insert(key, answer);
+    });
+    answer
+}
+
+/// [`single_slice_centres`], computed.
+fn search_centres(r: f64, toward: f64, away: f64) -> (f64, f64) {
     const N: usize = 48;
     const M: usize = 160;
     let bound = |g: f64| ((g * g - r * r) / (2.0 * g)).max(0.0);
@@ -222,9 +250,18 @@ fn cap_trend(
     let (o, h) = other?;
     let a1: usize = comps.iter().map(|&c| this.comps[c].area).sum();
     let mut hit = vec![false; o.comps.len()];
-    for (&x, &y) in this.ids.iter().zip(&o.ids) {
-        if x > 0 && y > 0 && comps.contains(&(x as usize - 1)) {
-            hit[y as usize - 1] = true;
+    // Only the group's box can hold its pixels: a fragmented slice has
+    // hundreds of small objects, each capped, and each read the whole slice.
+    let [u0, v0, u1, v1] = group_bbox(this, comps);
+    for v in v0..v1 {
+        let row = plane.width * v;
+        for (&x, &y) in this.ids[row + u0..row + u1]
+            .iter()
+            .zip(&o.ids[row + u0..row + u1])
+        {
+            if x > 0 && y > 0 && comps.contains(&(x as usize - 1)) {
+                hit[y as usize - 1] = true;
+            }
         }
     }
     let a0: usize = o
@@ -269,6 +306,20 @@ mod tests {
         // A nearer empty slice on one side pulls the shape to the other.
         let (t2, a2) = single_slice_centres(r, 3.0, g);
         assert!(t2 < a2, "{t2} {a2}");
+    }
+
+    #[test]
+    fn remembered_answers_are_the_computed_ones() {
+        for (r, t, a) in [(1.0, 7.0, 7.0), (0.6, 3.0, 9.0), (1.0, 7.0, 7.0)] {
+            let first = single_slice_centres(r, t, a);
+            assert_eq!(first, search_centres(r, t, a));
+            assert_eq!(single_slice_centres(r, t, a), first);
+        }
+        // Another gap is another question.
+        assert_ne!(
+            single_slice_centres(1.0, 7.0, 7.0),
+            single_slice_centres(1.0, 3.0, 9.0)
+        );
     }
 
     #[test]

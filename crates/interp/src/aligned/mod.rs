@@ -134,12 +134,11 @@ impl Crop {
             // The group is the whole foreground, and the crop holds it with
             // its ring of background (or the slice's own edge): its distances
             // are the whole slice's, already computed.
-            let d = (0..h)
-                .flat_map(|v| {
-                    let row = u0 + plane.width * (v0 + v);
-                    slice.sdf[row..row + w].iter().copied()
-                })
-                .collect();
+            let mut d = Vec::with_capacity(w * h);
+            for v in 0..h {
+                let row = u0 + plane.width * (v0 + v);
+                d.extend_from_slice(&slice.sdf[row..row + w]);
+            }
             return Crop {
                 u0,
                 v0,
