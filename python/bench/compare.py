@@ -114,7 +114,7 @@ class Table:
     def add(self, name, secs, value, base=None):
         self.rows.append((name, secs, value, base))
         ratio = "" if base is None else f"{secs / base:8.1f}x"
-        print(f"  {name:58s} {secs:9.3f} s {ratio:>9s}   {value}", flush=True)
+        print(f"  {name:58s} {secs:9.4f} s {ratio:>9s}   {value}", flush=True)
 
 
 def fmt(d):
