@@ -12,8 +12,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_interslice");
 #[test]
 fn sigterm_stops_the_server_while_a_request_computes() {
     let dir = tempfile::tempdir().unwrap();
-    // 192³ smoothed with σ = 20 voxels: many seconds of work in a test build.
-    interslice_test_support::loadtest::write_cells(dir.path(), 1, [192, 192, 192], false).unwrap();
+    // 256³ smoothed with σ = 20 voxels: many seconds of work in a test build
+    // (192³ finished within 2 s on a fast run of the machine).
+    interslice_test_support::loadtest::write_cells(dir.path(), 1, [256, 256, 256], false).unwrap();
     let mut child = Command::new(BIN)
         .arg("serve")
         .arg(dir.path())
@@ -50,7 +51,7 @@ fn sigterm_stops_the_server_while_a_request_computes() {
     )
     .unwrap();
     // Let the smoothing start (the cell is loaded: the work begins at once).
-    std::thread::sleep(Duration::from_secs(2));
+    std::thread::sleep(Duration::from_millis(500));
     let sent = Instant::now();
     let kill = Command::new("kill")
         .args(["-TERM", &child.id().to_string()])
