@@ -6,7 +6,7 @@ use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
-use interslice_interp::image::{ImageGuided, intensity_f32};
+use interslice_interp::image::{ImageGuided, Walk, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, drawn_for_skip, score, sparse_of};
 use interslice_interp::{Interpolator, SparseMask};
 use proptest::prelude::*;
@@ -110,6 +110,58 @@ fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
             assert!(!(left && right), "balls joined on z={k}");
         }
     }
+}
+
+/// The whole-box walk ([`Walk::Box`]) follows the image anywhere between
+/// the drawn slices, so it is where objects could merge: with the plan set
+/// to it, the balls the image bridges stay apart, the drawn slices are
+/// copied and nothing appears past the outermost drawn slices.
+#[test]
+fn the_whole_box_walk_keeps_objects_apart_and_the_drawn_slices_exact() {
+    let a = |p: [f64; 3]| in_ellipsoid(p, [10.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
+    let b = |p: [f64; 3]| in_ellipsoid(p, [25.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
+    let truth = shape([36, 32, 32], [1.0; 3], |p| a(p) || b(p));
+    let bridge = shape([36, 32, 32], [1.0; 3], |p| {
+        a(p) || b(p)
+            || (p[0] > 10.0
+                && p[0] < 25.0
+                && (p[1] - 16.0).abs() < 5.0
+                && (p[2] - 16.0).abs() < 11.0)
+    });
+    let drawn = drawn_for_skip(&truth, Axis::Z, 5).unwrap();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let m = ImageGuided::new(image_of(&bridge, 2.0));
+    let mut plan = m.plan(&input).unwrap();
+    plan.walk = Walk::Box;
+    let out = m.with_plan(&input, plan).interpolate(input).unwrap();
+    let (first, last) = (drawn[0], *drawn.last().unwrap());
+    let mut added = 0;
+    for k in 0..32 {
+        let s = out.slice(Axis::Z, k).unwrap();
+        if drawn.contains(&k) {
+            assert_eq!(s, sparse.slice(Axis::Z, k).unwrap(), "drawn slice {k}");
+        }
+        if k < first || k > last {
+            assert!(!s.iter().any(|&x| x), "slice {k} past the drawn range");
+        }
+        // The walk fills the bridge between the balls on its way, but no
+        // 8-connected path joins the left ball's half to the right one's.
+        added += s
+            .iter()
+            .zip(truth.slice(Axis::Z, k).unwrap())
+            .filter(|(o, t)| **o && !*t)
+            .count();
+        for comp in components8(&s, 36, 32) {
+            let left = comp.iter().any(|&p| p % 36 < 17);
+            let right = comp.iter().any(|&p| p % 36 > 18);
+            assert!(!(left && right), "balls joined on z={k}");
+        }
+    }
+    assert!(
+        added > 0,
+        "the walk followed the bright bridge nowhere: the test shows nothing"
+    );
 }
 
 fn components8(s: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {

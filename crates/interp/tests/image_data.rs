@@ -5,8 +5,10 @@
 //! it the test says so and passes (the data cannot be committed).
 use interslice_core::Axis;
 use interslice_interp::auto::ShapeAuto;
-use interslice_interp::image::{ImageGuided, intensity_f32};
+use interslice_interp::image::{ImageGuided, Walk, intensity_f32};
 use interslice_interp::protocol::score;
+use interslice_interp::protocol::{dice_on, drawn_for_skip, skipped, sparse_of};
+use interslice_interp::{Interpolator, SparseMask};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -85,5 +87,42 @@ fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_bett
                 "class 2: the walk must beat the shape: {g} vs {s}"
             );
         }
+    }
+}
+
+/// The same T1 classes traced on every 4th slice: on the thin grey-matter
+/// class 2 the prior, carried across three skipped slices, misplaces the
+/// class and the band walk cannot reach it; the walk on the whole box
+/// (seeded by the drawn slices only) wins the leave-one-out and the skipped
+/// slices. Class 1 (the background) gains a little the same way.
+#[test]
+fn on_the_t1_classes_the_whole_box_walk_takes_over_across_wider_gaps() {
+    let Some(dir) = data_dir() else { return };
+    let itk = dir.join("itk");
+    let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz")).expect("T1_kmeans");
+    let image = interslice_io::read_volume(&itk.join("T1.nii.gz")).expect("T1");
+    let guided = ImageGuided::new(Arc::new(intensity_f32(&image)));
+    // Measured (skipped-slice Dice, the plan without the walk / with the
+    // box walk): class 1 0.9714 / 0.9777, class 2 0.6836 / 0.7656.
+    for (class, gain) in [(1u16, 0.004), (2, 0.05)] {
+        let truth = labels.map(|l| l == class);
+        let drawn = drawn_for_skip(&truth, Axis::Z, 3).expect("class on some slice");
+        let sparse = sparse_of(&truth, Axis::Z, &drawn);
+        let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+        let plan = guided.plan(&input).unwrap();
+        assert_eq!(plan.walk, Walk::Box, "class {class}: {:?}", plan.walk_dice);
+        let dice_with = |walk: Walk| {
+            let mut p = plan.clone();
+            p.walk = walk;
+            let out = guided
+                .clone()
+                .with_plan(&input, p)
+                .interpolate(input)
+                .unwrap();
+            dice_on(&out, &truth, Axis::Z, &skipped(&drawn))
+        };
+        let (without, with) = (dice_with(Walk::Off), dice_with(Walk::Box));
+        println!("T1 class {class} k=3: without the walk {without:.4}, the box walk {with:.4}");
+        assert!(with > without + gain, "class {class}: {with} vs {without}");
     }
 }
