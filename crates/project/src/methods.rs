@@ -62,8 +62,10 @@ pub struct Recommendation {
 /// The [`Recommendation`] for `label` along `axis` of `tracing` on the cell
 /// whose intensities are `image`: the image-guided method's plan
 /// ([`ImageGuided::plan`]), which interpolates the held-out drawn slices
-/// (and walks once in the band of the label's shape prior), not the volume. With fewer than three drawn slices nothing can be held
-/// out and the shape default is recommended.
+/// (and walks once in the band of the label's shape prior, and where that
+/// comes close once on its whole box), not the volume. With fewer than
+/// three drawn slices nothing can be held out and the shape default is
+/// recommended.
 pub fn recommend(
     tracing: &dyn Tracing,
     geometry: &Geometry,
