@@ -39,7 +39,10 @@ export function methodNote(r: InterpResult | undefined, picked: string): string 
   const rec = r.recommended_method;
   const drawn = r.slices.filter((s) => s.drawn).length;
   // The server recommends the image-guided method exactly where it reads
-  // the image (its fusion, `image_weight` > 0, or its walk, weight 0).
+  // the image (its fusion, `image_weight` > 0, or its walk, weight 0). With
+  // two drawn slices nothing is held out: it walks where the outlines lie
+  // on a clear intensity edge.
+  if (rec === RECOMMENDED_FOR_EXPORT && drawn < 3) return `${rec}: your outlines follow a clear edge in the image`;
   if (rec === RECOMMENDED_FOR_EXPORT) return `${rec}: the image predicts your drawn slices better`;
   if (drawn < 3) return `${rec}: a third drawn slice lets the image be tested`;
   return `${rec}: the image did not help`;

@@ -75,6 +75,10 @@ describe("method note", () => {
     const r = result(three, { recommended_method: "shape-auto", image_weight: 0 });
     expect(methodNote(r, "")).toBe("shape-auto: the image did not help");
   });
+  it("says why the image is read on two drawn slices: an edge", () => {
+    const r = result(slices.slice(0, 2), { recommended_method: "image-guided", image_weight: 0 });
+    expect(methodNote(r, "")).toBe("image-guided: your outlines follow a clear edge in the image");
+  });
   it("says the image is tested from the third drawn slice", () => {
     const r = result(slices.slice(0, 2), { recommended_method: "shape-auto", image_weight: 0 });
     expect(methodNote(r, "")).toBe("shape-auto: a third drawn slice lets the image be tested");

@@ -7,7 +7,7 @@ use interslice_core::{Axis, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
 use interslice_interp::image::{ImageGuided, Walk, intensity_f32};
-use interslice_interp::protocol::{bounding_box, crop, drawn_for_skip, score, sparse_of};
+use interslice_interp::protocol::{bounding_box, crop, dice_on, drawn_for_skip, score, sparse_of};
 use interslice_interp::{Interpolator, SparseMask};
 use proptest::prelude::*;
 use std::sync::Arc;
@@ -308,4 +308,40 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
             );
         }
     }
+}
+
+/// With two drawn slices nothing can be held out: the whole-box walk is
+/// used where the outlines lie on a clean intensity edge, the shape where
+/// intensity says little about them.
+#[test]
+fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
+    // A ball whose outline on the two drawn slices differs from the cone
+    // a shape blend would draw between them.
+    let truth = shape([32, 32, 24], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 12.0], [10.0, 10.0, 10.0])
+    });
+    let drawn = [5usize, 19];
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let skipped: Vec<usize> = (6..19).collect();
+    let clear = ImageGuided::new(image_of(&truth, 5.0));
+    let plan = clear.plan(&input).unwrap();
+    assert_eq!(plan.walk, Walk::Box);
+    let walked = clear.interpolate(input).unwrap();
+    let shaped = ShapeAuto.interpolate(input).unwrap();
+    let (w, s) = (
+        dice_on(&walked, &truth, Axis::Z, &skipped),
+        dice_on(&shaped, &truth, Axis::Z, &skipped),
+    );
+    assert!(w > s + 0.02, "the walk {w:.4} against the shape {s:.4}");
+    for &d in &drawn {
+        assert_eq!(
+            walked.slice(Axis::Z, d).unwrap(),
+            sparse.slice(Axis::Z, d).unwrap()
+        );
+    }
+    // Noise ten times the contrast: the shape alone, bit for bit.
+    let noisy = ImageGuided::new(image_of(&truth, 800.0));
+    assert_eq!(noisy.plan(&input).unwrap().walk, Walk::Off);
+    assert_eq!(noisy.interpolate(input).unwrap(), shaped);
 }

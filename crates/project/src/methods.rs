@@ -63,9 +63,9 @@ pub struct Recommendation {
 /// whose intensities are `image`: the image-guided method's plan
 /// ([`ImageGuided::plan`]), which interpolates the held-out drawn slices
 /// (and walks once in the band of the label's shape prior, and where that
-/// comes close once on its whole box), not the volume. With fewer than
-/// three drawn slices nothing can be held out and the shape default is
-/// recommended.
+/// comes close once on its whole box), not the volume. With two drawn
+/// slices nothing can be held out: the image is read only where the
+/// outlines lie on a clear intensity edge (`image::EDGE_SEPARATION`).
 pub fn recommend(
     tracing: &dyn Tracing,
     geometry: &Geometry,
@@ -83,7 +83,7 @@ pub fn recommend(
             interpolator: method_by_name(None)?,
         })
     };
-    if drawn.len() < 3 {
+    if drawn.len() < 2 {
         return shape();
     }
     let input = SparseMask::new(&mask, axis, &drawn).with_cancel(cancel);
