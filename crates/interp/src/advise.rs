@@ -49,6 +49,7 @@
 //! labels' rates (and bulges), `V` the sum of their volumes. The N best slices are chosen
 //! greedily: after each choice its gap is split (with the same rate) and the
 //! next best slice is taken, so suggestions spread over the volume.
+use crate::auto::field_of_pieces;
 use crate::labels::{DrawnLabels, sorted_drawn};
 use crate::loo::Compact;
 use crate::predict::{LeaveOneOut, estimate, held_out_errors};
@@ -249,7 +250,7 @@ fn label_rates(
             errors.push(e);
         }
     }
-    let rates = (0..drawn.len() - 1)
+    let mut rates = (0..drawn.len() - 1)
         .map(|g| {
             let l = (drawn[g + 1] - drawn[g]) as f64;
             let change = slices[g]
@@ -269,9 +270,20 @@ fn label_rates(
             loo.max(change / (4.0 * l))
         })
         .collect::<Vec<f64>>();
+    let mut bulge = bulge_density(drawn, &areas);
+    let (u, v) = axis.in_plane();
+    let dims = mask.geometry().dims;
+    if field_of_pieces(&slices, dims[u], dims[v]) {
+        // Held-out slices of a field of pieces say little about which gap
+        // is harder (see `field_of_pieces`): every gap gets the mean rate
+        // and no bulge, and the slices spread as evenly as they can.
+        let mean = rates.iter().sum::<f64>() / rates.len().max(1) as f64;
+        rates.iter_mut().for_each(|r| *r = mean);
+        bulge.iter_mut().for_each(|k| *k = 0.0);
+    }
     Ok(LabelModel {
         rates,
-        bulge: bulge_density(drawn, &areas),
+        bulge,
         volume,
         loo: estimate(&errors),
     })
@@ -595,6 +607,46 @@ mod tests {
         assert_eq!(widest_allowed(&gaps, 2), usize::MAX);
         let hard_first = allocate(&gaps, 2).iter().filter(|s| s.0 < 3).count();
         assert_eq!(hard_first, 2);
+    }
+
+    /// On a field of pieces (here 16 tubes per slice, ending at different
+    /// depths) every gap gets the same rate and no bulge: the held-out
+    /// slices say little about which gap is harder. One object keeps its
+    /// own rates.
+    #[test]
+    fn a_field_of_pieces_gets_one_rate_for_every_gap() {
+        let g = Geometry::new([64, 64, 40], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let mut field: Mask = Volume::zeros(g.clone());
+        let mut ball: Mask = Volume::zeros(g);
+        for z in 0..40usize {
+            for y in 0..64usize {
+                for x in 0..64usize {
+                    let (i, j) = (x / 16, y / 16);
+                    let (dx, dy) = ((x % 16) as f64 - 8.0, (y % 16) as f64 - 8.0);
+                    let ends = 4 + 2 * (i + 4 * j) % 32;
+                    field.set(
+                        x,
+                        y,
+                        z,
+                        z >= ends.min(20) && z < 36 && dx * dx + dy * dy <= 9.0,
+                    );
+                    let (bx, by, bz) = (x as f64 - 32.0, y as f64 - 32.0, z as f64 - 20.0);
+                    ball.set(x, y, z, bx * bx + by * by + bz * bz <= 17.0f64.powi(2));
+                }
+            }
+        }
+        let method = crate::by_name(crate::DEFAULT_METHOD).unwrap();
+        let drawn: Vec<usize> = (4..=36).step_by(4).collect();
+        let f = label_rates(&field, Axis::Z, &drawn, method.as_ref()).unwrap();
+        assert!(
+            f.rates.iter().all(|&r| r == f.rates[0] && r > 0.0),
+            "{:?}",
+            f.rates
+        );
+        assert!(f.bulge.iter().all(|&k| k == 0.0));
+        let drawn: Vec<usize> = (3..=37).step_by(4).collect();
+        let b = label_rates(&ball, Axis::Z, &drawn, method.as_ref()).unwrap();
+        assert!(b.rates.iter().any(|&r| r != b.rates[0]), "{:?}", b.rates);
     }
 
     #[test]

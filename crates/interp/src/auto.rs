@@ -239,14 +239,22 @@ pub fn pieces_apart(compact: &Compact) -> bool {
     }
     let g = compact.mask.geometry();
     let (a, b) = compact.axis.in_plane();
-    let (w, h) = (g.dims[a], g.dims[b]);
+    let slices: Vec<Vec<bool>> = (0..compact.real.len()).map(|p| compact.truth(p)).collect();
+    field_of_pieces(&slices, g.dims[a], g.dims[b])
+}
+
+/// Whether drawn `slices` (row-major, `width` × `height`) are a field of
+/// pieces: [`MANY_PIECES`] or more separate pieces (8-connected) on average
+/// on the slices that show the label. Held out across twice the gap, the
+/// pieces of such a tracing no longer correspond for any method, so what
+/// the held-out slices say is weak: [`pieces_apart`] rules `shape-aligned`
+/// out on it, and the advice ([`crate::advise`]) does not learn its rates
+/// from them.
+pub fn field_of_pieces(slices: &[Vec<bool>], width: usize, height: usize) -> bool {
     let (mut pieces, mut shown) = (0usize, 0usize);
-    for pos in 0..compact.real.len() {
-        let slice = compact.truth(pos);
-        if slice.iter().any(|&x| x) {
-            pieces += label_2d(&slice, w, h, Connectivity::Full).1.len();
-            shown += 1;
-        }
+    for slice in slices.iter().filter(|s| s.iter().any(|&x| x)) {
+        pieces += label_2d(slice, width, height, Connectivity::Full).1.len();
+        shown += 1;
     }
     shown > 0 && pieces as f64 >= MANY_PIECES * shown as f64
 }

@@ -141,6 +141,17 @@ pub const GRID: [(f32, f32); 8] = [
 /// Scales tried to calibrate the confidence (`σ(c · z)`).
 const SCALES: [f32; 6] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0];
 
+/// Scales tried to calibrate the walk's confidence, `σ(c (p − ½))`: its
+/// probability `p` is close to 0 or 1 on both sides of a clean edge, also
+/// where the tracing puts the boundary a voxel away, so its certainty is
+/// learnt from the held-out slices like the fusion's.
+pub const WALK_SCALES: [f32; 7] = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
+
+/// The walk's scale where nothing was held out (two drawn slices): a
+/// certain walk (`p` = 0 or 1) counts as 0.88 sure, as sure as a shape
+/// blend one pixel from its boundary at the default scale.
+pub const UNTESTED_WALK_SCALE: f32 = 4.0;
+
 /// One held-out slice: its truth, the prior's signed distance, the image,
 /// and how far (slices) the prediction reached.
 type Case<'a> = (Vec<bool>, Vec<f32>, &'a [f32], f64);
@@ -194,6 +205,11 @@ pub struct Plan {
     pub walk: Walk,
     /// See `walk` (NaN where a walk was not tried).
     pub walk_dice: (f64, f64, f64),
+    /// Scale `c` of the walk's confidence `σ(c |p − ½|)` (`p` its
+    /// probability of inside), fitted on the held-out slices as the
+    /// fusion's is ([`WALK_SCALES`]); [`UNTESTED_WALK_SCALE`] where nothing
+    /// was held out.
+    pub walk_scale: f32,
     /// Calibrated scale of the logit for the confidence.
     pub scale: f32,
     /// The prior's boundary error on the held-out slices (physical units)
@@ -284,6 +300,7 @@ impl ImageGuided {
             loo_dice: (f64::NAN, f64::NAN),
             walk: Walk::Off,
             walk_dice: (f64::NAN, f64::NAN, f64::NAN),
+            walk_scale: UNTESTED_WALK_SCALE,
             scale: 1.0,
             prior_error: (plane.spacing[0].min(plane.spacing[1]) as f32, 1.0),
             model,
@@ -379,20 +396,7 @@ impl ImageGuided {
                 (fuse(phi, img, m, &plane, t, plan.params).1, truth)
             })
             .collect();
-        let mut best = f64::INFINITY;
-        for c in SCALES {
-            let mut loss = 0.0f64;
-            for (z, truth) in &logits {
-                for (&zi, &t) in z.iter().zip(truth.iter()) {
-                    let p = f64::from(sigmoid(c * zi)).clamp(1e-6, 1.0 - 1e-6);
-                    loss -= if t { p.ln() } else { (1.0 - p).ln() };
-                }
-            }
-            if loss < best {
-                best = loss;
-                plan.scale = c;
-            }
-        }
+        plan.scale = best_scale(&SCALES, logits.iter().map(|(z, t)| (z, *t)));
         if self.walks {
             self.try_walk(input, &choice, &cases, &mut plan)?;
         }
@@ -461,20 +465,23 @@ impl ImageGuided {
             pooled_dice(acc)
         };
         // The walk's decision on each held-out slice, kept apart per object
-        // within `reach(δ)` of the prior's boundary.
+        // within `reach(δ)` of the prior's boundary; its pooled Dice and the
+        // scale of its confidence fitted on those slices.
         let decided = |walked: &walk::Walked, reach: &(dyn Fn(f64) -> f32 + Sync)| {
-            let masks: Vec<Vec<bool>> = odd
+            let (masks, logits): (Vec<Vec<bool>>, Vec<Vec<f32>>) = odd
                 .par_iter()
                 .zip(&erased)
                 .map(|(&i, &real)| {
                     let (_, phi, _, delta) = &cases[i];
-                    walked.logit(real, &plane).map_or_else(
-                        || vec![false; plane.len()],
-                        |z| separate(phi, &z, &plane, reach(*delta)),
-                    )
+                    let z = walked
+                        .logit(real, &plane)
+                        .unwrap_or_else(|| vec![-0.5; plane.len()]);
+                    (separate(phi, &z, &plane, reach(*delta)), z)
                 })
-                .collect();
-            held_dice(&masks)
+                .unzip();
+            let truths = odd.iter().map(|&i| &cases[i].0);
+            let scale = best_scale(&WALK_SCALES, logits.iter().zip(truths));
+            (held_dice(&masks), scale)
         };
         let fused = held_dice(&ours);
         let in_band = |delta: f64| band(&plane, delta);
@@ -482,12 +489,13 @@ impl ImageGuided {
         let Some(walked) = self.walker().walk_with(&held_input, Some(&seeds))? else {
             return Ok(());
         };
-        let banded = decided(&walked, &in_band);
+        let (banded, band_scale) = decided(&walked, &in_band);
         plan.walk_dice = (fused, banded, f64::NAN);
         let clears =
             |walk: f64, than: f64| walk > than + MARGIN && 1.0 - walk < WALK_RHO * (1.0 - than);
         if clears(banded, fused) {
             plan.walk = Walk::Band;
+            plan.walk_scale = band_scale;
         }
         let widest = compact.real.windows(2).map(|w| w[1] - w[0]).max();
         if widest < Some(BOX_WALK_MIN_GAP) || 1.0 - banded > BOX_WALK_GATE * (1.0 - fused) {
@@ -496,7 +504,7 @@ impl ImageGuided {
         let Some(walked) = self.walker().walk_with(&held_input, None)? else {
             return Ok(());
         };
-        let boxed = decided(&walked, &|_| f32::INFINITY);
+        let (boxed, box_scale) = decided(&walked, &|_| f32::INFINITY);
         plan.walk_dice.2 = boxed;
         let chosen = if plan.walk == Walk::Band {
             banded
@@ -505,6 +513,7 @@ impl ImageGuided {
         };
         if clears(boxed, chosen) {
             plan.walk = Walk::Box;
+            plan.walk_scale = box_scale;
         }
         Ok(())
     }
@@ -595,7 +604,8 @@ impl ImageGuided {
 
     /// The random walk of [`Plan::walk`] on `input` (in the band of `prior`
     /// or on the whole box), its objects kept apart on every skipped slice;
-    /// the confidence is the walk's probability of what it decided. `None`
+    /// the confidence is `σ(c (p − ½))` of the walk's probability, at the
+    /// plan's [`Plan::walk_scale`]. `None`
     /// when the walk declines the box (larger than on the leave-one-out run).
     fn run_walk(
         &self,
@@ -624,7 +634,7 @@ impl ImageGuided {
                 };
                 Some((separate(phi, &z, &plane, reach), z))
             },
-            |z| 0.5 + z.abs().min(0.5),
+            |z| sigmoid(plan.walk_scale * z.abs()),
         )
         .map(Some)
     }
@@ -662,6 +672,29 @@ impl Interpolator for ImageGuided {
             ..ImageGuided::new(Arc::new(stacked))
         })))
     }
+}
+
+/// The scale `c` of `scales` with the least log-loss of `σ(c z)` against
+/// the truth over the `(logit, truth)` slices (a one-parameter Platt
+/// scaling); the first scale when no slice is given.
+fn best_scale<'a>(
+    scales: &[f32],
+    slices: impl Iterator<Item = (&'a Vec<f32>, &'a Vec<bool>)> + Clone,
+) -> f32 {
+    let mut best = (f64::INFINITY, scales[0]);
+    for &c in scales {
+        let mut loss = 0.0f64;
+        for (z, truth) in slices.clone() {
+            for (&zi, &t) in z.iter().zip(truth.iter()) {
+                let p = f64::from(sigmoid(c * zi)).clamp(1e-6, 1.0 - 1e-6);
+                loss -= if t { p.ln() } else { (1.0 - p).ln() };
+            }
+        }
+        if loss < best.0 {
+            best = (loss, c);
+        }
+    }
+    best.1
 }
 
 /// Seeds for the walk of [`Plan::walk`] on skipped slice `s` of `input`
