@@ -79,9 +79,9 @@ proptest! {
     }
 }
 
-#[test]
-fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
-    // Two balls 3 voxels apart; the image is bright in both and in the gap.
+/// Two balls 3 voxels apart, and the mask an image should show to be bright
+/// in both and in the gap between them.
+fn bridged_balls() -> (Mask, Mask) {
     let a = |p: [f64; 3]| in_ellipsoid(p, [10.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
     let b = |p: [f64; 3]| in_ellipsoid(p, [25.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
     let truth = shape([36, 32, 32], [1.0; 3], |p| a(p) || b(p));
@@ -92,6 +92,12 @@ fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
                 && (p[1] - 16.0).abs() < 5.0
                 && (p[2] - 16.0).abs() < 11.0)
     });
+    (truth, bridge)
+}
+
+#[test]
+fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
+    let (truth, bridge) = bridged_balls();
     let drawn = drawn_for_skip(&truth, Axis::Z, 5).unwrap();
     let sparse = sparse_of(&truth, Axis::Z, &drawn);
     let out = interpolate(
@@ -118,16 +124,7 @@ fn objects_apart_in_the_tracing_stay_apart_where_the_image_bridges_them() {
 /// copied and nothing appears past the outermost drawn slices.
 #[test]
 fn the_whole_box_walk_keeps_objects_apart_and_the_drawn_slices_exact() {
-    let a = |p: [f64; 3]| in_ellipsoid(p, [10.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
-    let b = |p: [f64; 3]| in_ellipsoid(p, [25.0, 16.0, 16.0], [6.0, 6.0, 12.0]);
-    let truth = shape([36, 32, 32], [1.0; 3], |p| a(p) || b(p));
-    let bridge = shape([36, 32, 32], [1.0; 3], |p| {
-        a(p) || b(p)
-            || (p[0] > 10.0
-                && p[0] < 25.0
-                && (p[1] - 16.0).abs() < 5.0
-                && (p[2] - 16.0).abs() < 11.0)
-    });
+    let (truth, bridge) = bridged_balls();
     let drawn = drawn_for_skip(&truth, Axis::Z, 5).unwrap();
     let sparse = sparse_of(&truth, Axis::Z, &drawn);
     let input = SparseMask::new(&sparse, Axis::Z, &drawn);

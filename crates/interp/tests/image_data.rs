@@ -22,6 +22,14 @@ fn data_dir() -> Option<PathBuf> {
     dir
 }
 
+/// ITK's example T1, its k-means classes, and the image-guided method on it.
+fn t1(dir: &std::path::Path) -> (interslice_core::LabelVolume, ImageGuided) {
+    let itk = dir.join("itk");
+    let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz")).expect("T1_kmeans");
+    let image = interslice_io::read_volume(&itk.join("T1.nii.gz")).expect("T1");
+    (labels, ImageGuided::new(Arc::new(intensity_f32(&image))))
+}
+
 #[test]
 fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
     let Some(dir) = data_dir() else { return };
@@ -65,10 +73,7 @@ fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
 #[test]
 fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_better() {
     let Some(dir) = data_dir() else { return };
-    let itk = dir.join("itk");
-    let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz")).expect("T1_kmeans");
-    let image = interslice_io::read_volume(&itk.join("T1.nii.gz")).expect("T1");
-    let guided = ImageGuided::new(Arc::new(intensity_f32(&image)));
+    let (labels, guided) = t1(&dir);
     // Measured at k = 1 (skipped-slice Dice, shape-auto / image-guided):
     // 0.9785 / 0.9785, 0.7488 / 0.8063 (the walk), 0.6926 / 0.6926,
     // 0.4834 / 0.5873, 0.6302 / 0.7641, 0.7481 / 0.8456.
@@ -98,10 +103,7 @@ fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_bett
 #[test]
 fn on_the_t1_classes_the_whole_box_walk_takes_over_across_wider_gaps() {
     let Some(dir) = data_dir() else { return };
-    let itk = dir.join("itk");
-    let labels = interslice_io::read_labels(&itk.join("T1_kmeans.nii.gz")).expect("T1_kmeans");
-    let image = interslice_io::read_volume(&itk.join("T1.nii.gz")).expect("T1");
-    let guided = ImageGuided::new(Arc::new(intensity_f32(&image)));
+    let (labels, guided) = t1(&dir);
     // Measured (skipped-slice Dice, the plan without the walk / with the
     // box walk): class 1 0.9714 / 0.9777, class 2 0.6836 / 0.7656.
     for (class, gain) in [(1u16, 0.004), (2, 0.05)] {
