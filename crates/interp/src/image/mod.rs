@@ -465,8 +465,8 @@ impl ImageGuided {
             pooled_dice(acc)
         };
         // The walk's decision on each held-out slice, kept apart per object
-        // within `reach(δ)` of the prior's boundary; its pooled Dice and the
-        // scale of its confidence fitted on those slices.
+        // within `reach(δ)` of the prior's boundary: its pooled Dice, and its
+        // logits to fit the scale of its confidence on should it be chosen.
         let decided = |walked: &walk::Walked, reach: &(dyn Fn(f64) -> f32 + Sync)| {
             let (masks, logits): (Vec<Vec<bool>>, Vec<Vec<f32>>) = odd
                 .par_iter()
@@ -479,9 +479,11 @@ impl ImageGuided {
                     (separate(phi, &z, &plane, reach(*delta)), z)
                 })
                 .unzip();
+            (held_dice(&masks), logits)
+        };
+        let fit_scale = |logits: &[Vec<f32>]| {
             let truths = odd.iter().map(|&i| &cases[i].0);
-            let scale = best_scale(&WALK_SCALES, logits.iter().zip(truths));
-            (held_dice(&masks), scale)
+            best_scale(&WALK_SCALES, logits.iter().zip(truths))
         };
         let fused = held_dice(&ours);
         let in_band = |delta: f64| band(&plane, delta);
@@ -489,13 +491,13 @@ impl ImageGuided {
         let Some(walked) = self.walker().walk_with(&held_input, Some(&seeds))? else {
             return Ok(());
         };
-        let (banded, band_scale) = decided(&walked, &in_band);
+        let (banded, band_logits) = decided(&walked, &in_band);
         plan.walk_dice = (fused, banded, f64::NAN);
         let clears =
             |walk: f64, than: f64| walk > than + MARGIN && 1.0 - walk < WALK_RHO * (1.0 - than);
         if clears(banded, fused) {
             plan.walk = Walk::Band;
-            plan.walk_scale = band_scale;
+            plan.walk_scale = fit_scale(&band_logits);
         }
         let widest = compact.real.windows(2).map(|w| w[1] - w[0]).max();
         if widest < Some(BOX_WALK_MIN_GAP) || 1.0 - banded > BOX_WALK_GATE * (1.0 - fused) {
@@ -504,7 +506,7 @@ impl ImageGuided {
         let Some(walked) = self.walker().walk_with(&held_input, None)? else {
             return Ok(());
         };
-        let (boxed, box_scale) = decided(&walked, &|_| f32::INFINITY);
+        let (boxed, box_logits) = decided(&walked, &|_| f32::INFINITY);
         plan.walk_dice.2 = boxed;
         let chosen = if plan.walk == Walk::Band {
             banded
@@ -513,7 +515,7 @@ impl ImageGuided {
         };
         if clears(boxed, chosen) {
             plan.walk = Walk::Box;
-            plan.walk_scale = box_scale;
+            plan.walk_scale = fit_scale(&box_logits);
         }
         Ok(())
     }
