@@ -98,12 +98,12 @@ impl ShapeAuto {
         let near = near_label(input)?;
         let compact = Compact::of(&input.on(input.mask, &near))?;
         let aligned_apart = pieces_apart(&compact);
+        let ruled_out = |c: &dyn Interpolator| aligned_apart && c.name() == "shape-aligned";
         // The candidates run side by side: each one's runs on the compact
         // stack are too small to keep every core busy on their own.
         let runs: Vec<Option<Result<Vec<HeldOut>, InterpError>>> = candidates()
             .par_iter()
-            .enumerate()
-            .map(|(i, c)| (i != 0 || !aligned_apart).then(|| held_out(&compact, c.as_ref(), input)))
+            .map(|c| (!ruled_out(c.as_ref())).then(|| held_out(&compact, c.as_ref(), input)))
             .collect();
         let mut scores = Vec::new();
         let mut preds = Vec::new();
