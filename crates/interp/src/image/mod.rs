@@ -237,13 +237,6 @@ impl Plan {
         self.walk != Walk::Off || self.fuses()
     }
 
-    /// PROBE
-    pub fn probe_sep(&self) -> f64 {
-        self.model
-            .as_ref()
-            .map_or(f64::NAN, IntensityModel::separation)
-    }
-
     /// Whether the fusion reads the image (see [`Plan::uses_image`]).
     fn fuses(&self) -> bool {
         self.params.w > 0.0 && self.model.is_some()
