@@ -43,11 +43,14 @@ export function saveDoneWhen(store: Storage, v: number): void {
   store.setItem(DONE_KEY, String(v));
 }
 
-/** Whether the tracing is done by the threshold: the best slice would add less. */
+/**
+ * Whether the tracing is done by the threshold: no suggested slice would add
+ * as much. The largest gain, not the first suggestion's: on a short structure
+ * the slices next to its ends come first by rule, whatever their gain.
+ */
 export function doneBy(advice: Advice, threshold: number): boolean {
   if (threshold <= 0) return false;
-  const best = advice.suggestions[0];
-  return best === undefined || best.dice_gain < threshold;
+  return advice.suggestions.every((s) => s.dice_gain < threshold);
 }
 
 /** The advice of the label being traced, kept fresh. */

@@ -30,6 +30,8 @@ describe("the done-when hint", () => {
     expect(doneBy(advice([0.02, 0.01]), 0.005)).toBe(false);
     expect(doneBy(advice([0.004, 0.001]), 0.005)).toBe(true);
     expect(doneBy(advice([]), 0.005)).toBe(true);
+    // A cap suggested first with a small gain does not end the tracing.
+    expect(doneBy(advice([0.001, 0.02]), 0.005)).toBe(false);
     // 0 turns the hint off.
     expect(doneBy(advice([0.0001]), 0)).toBe(false);
   });
