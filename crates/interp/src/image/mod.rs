@@ -30,10 +30,11 @@
 //!    kept apart per object as the fusion's is. It replaces the fusion where
 //!    it predicts the held-out slices of one leave-one-out run (every other
 //!    interior drawn slice erased from the volume) clearly better
-//!    ([`WALK_RHO`], a bar for narrow gaps only). Where that band walk comes close and the gaps are
-//!    wider than one slice either side, the walk on the label's whole box
-//!    is tried too ([`Walk::Box`]): it follows the image past the prior's
-//!    band, which thin intensity-defined structures need.
+//!    ([`WALK_RHO`], a bar for narrow gaps only). Where that band walk comes
+//!    close and the gaps are wider than one slice either side, the walk on
+//!    the label's whole box is tried too ([`Walk::Box`]): it follows the
+//!    image past the prior's band, which thin intensity-defined structures
+//!    need.
 //!
 //! Invariants are those of the trait: only skipped slices inside the drawn
 //! range are changed (drawn slices are copied, drawn-empty slices stay
