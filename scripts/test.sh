@@ -6,20 +6,31 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-echo "== cargo fmt --check"
+# Each stage's heading also says how long the stage before it took, so a slow
+# stage shows in any log of a run.
+stage_start=$SECONDS
+stage() {
+  [ -z "${stage_name:-}" ] || echo "-- $stage_name took $((SECONDS - stage_start)) s"
+  stage_name="$1"
+  stage_start=$SECONDS
+  [ -z "$1" ] || echo "== $1"
+}
+
+stage "cargo fmt --check"
 cargo fmt --all --check
-echo "== web UI build"
+stage "web UI build"
 scripts/build-web.sh
 export WEB_BUILT=1
-echo "== cargo clippy"
+stage "cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
-echo "== cargo doc"
+stage "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
-echo "== cargo test"
+stage "cargo test"
 cargo test --workspace --no-fail-fast
 for t in scripts/test-*.sh; do
   [ -e "$t" ] || continue
-  echo "== $t"
+  stage "$t"
   bash "$t"
 done
-echo "all tests passed"
+stage ""
+echo "all tests passed in $SECONDS s"
