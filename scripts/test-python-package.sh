@@ -14,9 +14,10 @@ repo="$PWD"
 target="${CARGO_TARGET_DIR:-$repo/target}"
 mkdir -p "$target"
 target="$(cd "$target" && pwd)"
-# python/ is its own workspace; building it into the main target dir reuses
-# every dependency the workspace build already compiled (same versions, same
-# dev profile) instead of compiling them all a second time in python/target.
+# python/ is a member of the main workspace whose dependencies' features are
+# pinned to the workspace's (python/Cargo.toml): maturin, building it alone
+# into the main target dir, reuses every dependency `cargo test --workspace`
+# compiled instead of compiling them all a second time.
 export CARGO_TARGET_DIR="$target"
 venv="$target/pyenv-package"
 py="$venv/bin/python"
@@ -54,8 +55,8 @@ fi
 
 echo "== python/: cargo fmt, clippy"
 export PYO3_PYTHON="$py"
-cargo fmt --manifest-path python/Cargo.toml --check
-cargo clippy -q --manifest-path python/Cargo.toml --all-targets -- -D warnings
+cargo fmt -p interslice-python --check
+cargo clippy -q -p interslice-python --all-targets -- -D warnings
 
 echo "== python/: wheel"
 # The dev profile (optimised dependencies, as in the workspace) reuses what

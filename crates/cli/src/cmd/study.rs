@@ -44,7 +44,7 @@ pub struct Args {
     pub label_arg: Option<crate::label::LabelArg>,
     /// Instead of dropping slices: simulate a tracer who traces the outermost
     /// slices and then `--budget` more chosen by these strategies
-    /// (`uniform`, `advised`, or `oracle`: greedy with the ground truth, the ceiling of any advice; slow), and compare the Dice (strategy.csv, strategy.md).
+    /// (`uniform`, `advised`, or `oracle`: the best slices found knowing the ground truth, the ceiling of any advice; slow), and compare the Dice (strategy.csv, strategy.md).
     #[arg(long, value_delimiter = ',')]
     pub strategy: Option<Vec<String>>,
     /// Slices traced after the outermost two, for `--strategy`: a range

@@ -1,4 +1,4 @@
-"""Writes the golden files of crates/io/tests/golden.rs with established libraries.
+"""Writes the golden files of crates/io/tests/integration/golden.rs with established libraries.
 
 Run once (python3 make_golden.py, with SimpleITK, nibabel, tifffile, numpy and
 pynrrd installed) and commit the output; the tests assert exact values.

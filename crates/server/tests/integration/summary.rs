@@ -1,6 +1,6 @@
 //! `GET /api/cells/{cell}/summary`: a tracing's slices, time and predicted
 //! Dice, read like every tracing (a tracer their own, a reviewer anyone's).
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_test_support::client::Client;

@@ -2,7 +2,7 @@
 //! works without a password session; users cannot read or change each other's
 //! tracings (reviewers read them); paths are never taken from clients; large
 //! bodies are 413, malformed ones 400, slices out of range 404.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_store::Role;

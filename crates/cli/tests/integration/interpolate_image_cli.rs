@@ -6,7 +6,7 @@ use interslice_core::{AnyVolume, Axis, Geometry, LabelVolume, LengthUnit, Volume
 
 // Shared helpers; this file uses the binary and the error check only.
 #[allow(dead_code)]
-mod common;
+use crate::common;
 use common::{assert_one_line_error, bin};
 
 /// A ball (label 1) and an image that shows it (bright inside).

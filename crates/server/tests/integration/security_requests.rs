@@ -4,7 +4,7 @@
 //! want `application/json`; ratings belong to their author and reviewers;
 //! a session opened by name is refused where passwords are required; a
 //! loopback server answers only loopback `Host` names.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_server::RunningServer;

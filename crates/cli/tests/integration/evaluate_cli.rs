@@ -1,6 +1,6 @@
 //! `interslice evaluate` as a user runs it: the binary on reference cases, its
 //! JSON keys and values, the table, and one-line errors on bad input.
-mod common;
+use crate::common;
 use common::{assert_one_line_error, bin, refs, stdout_json};
 use serde_json::Value;
 use std::path::PathBuf;

@@ -1,7 +1,7 @@
 //! The image-guided method through the server: it reads the cell's own
 //! intensities wherever a `method` is named (interpolate, export, advice,
 //! the tracing summary, evaluation) and keeps every drawn slice.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_core::Axis;

@@ -2,7 +2,7 @@
 //! from memory, self-contained only, and checked against the cell's grid
 //! before its data is decoded; a cell file that cannot be read is that
 //! cell's error, never the server's end.
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -6,7 +6,7 @@ use interslice_core::{Axis, Mask};
 use interslice_interp::mesh::mesh_methods;
 use interslice_interp::{InterpError, Interpolator, SparseMask, by_name};
 
-mod common;
+use crate::common;
 use common::{dice, every, in_ellipsoid, shape, sparse};
 
 fn ellipsoid() -> Mask {

@@ -4,7 +4,7 @@
 //! contours alone; contradicting crossings and an unknown axis are one-line
 //! errors.
 #[allow(dead_code)]
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, bin};
 use interslice_core::contour::Contour;

@@ -2,7 +2,7 @@
 //! thresholds and class sizes of the reference volumes, the clean-up options
 //! (largest component with 6 or 26 neighbours, hole filling), STAPLE's
 //! estimates on synthetic raters, and one-line errors on bad input.
-mod common;
+use crate::common;
 use common::{assert_one_line_error, bin, refs, stdout_json};
 use interslice_core::{AnyVolume, Geometry, LabelVolume, LengthUnit, Volume};
 use rand::{Rng, SeedableRng};

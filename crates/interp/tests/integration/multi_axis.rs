@@ -2,7 +2,7 @@
 //! (`multi_axis::combine`): every drawn slice of every axis reproduced,
 //! crossings checked, drawn-empty slices kept empty, and more orientations
 //! scoring better than one on the phantom.
-mod common;
+use crate::common;
 
 use common::{dice, in_ellipsoid, shape, sparse};
 use interslice_core::phantom::{PhantomParams, generate};

@@ -3,7 +3,7 @@
 //! preview contour; `recommend: true` names the image-guided method on a
 //! phantom cell whose image shows the nucleus and the shape default on a
 //! cell whose image is noise.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_core::phantom::{PhantomParams, generate};

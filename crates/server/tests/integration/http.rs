@@ -1,7 +1,7 @@
 //! The tracing workflow over real HTTP on loopback: cells, slices, contours,
 //! reload after a restart, undo, interpolation, export and evaluation; the
 //! OpenAPI document against the router; a short run of the load test.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_core::{Axis, LabelVolume, metrics};
@@ -456,7 +456,7 @@ fn openapi_document_lists_every_route() {
 
     // The routes of the reference tables in docs/API.md (rows that start
     // with "| `METHOD /api/..."), query strings and optional parts removed.
-    let api_md = include_str!("../../../docs/API.md");
+    let api_md = include_str!("../../../../docs/API.md");
     let mut declared: Vec<(String, String)> = api_md
         .lines()
         .filter_map(|l| l.strip_prefix("| `"))

@@ -1,6 +1,6 @@
 //! `GET /api/cells/{cell}/advice`: which slice of a label to trace next, from
 //! the signed-in user's own tracing, as `interslice advise` ranks them.
-mod common;
+use crate::common;
 
 use common::*;
 use serde_json::json;

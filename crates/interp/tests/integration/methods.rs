@@ -3,7 +3,7 @@
 use interslice_core::{Axis, Mask};
 use interslice_interp::{SparseMask, methods};
 
-mod common;
+use crate::common;
 use common::{dice, every, in_ellipsoid, sparse};
 
 /// [`common::shape`] with the coordinates as three arguments.

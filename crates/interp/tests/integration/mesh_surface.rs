@@ -4,7 +4,7 @@ use interslice_core::{Geometry, LengthUnit, Mask, Volume};
 use interslice_interp::mesh::{mask_surface, voxelize::voxelize};
 use proptest::prelude::*;
 
-mod common;
+use crate::common;
 use common::dice;
 
 fn sphere(n: usize, spacing: [f64; 3], r: f64) -> Mask {

@@ -12,7 +12,7 @@ use interslice_interp::{Interpolator, SparseMask};
 use proptest::prelude::*;
 use std::sync::Arc;
 
-mod common;
+use crate::common;
 use common::{in_ellipsoid, shape};
 
 /// Deterministic noise in [-1, 1] (SplitMix64 of the index).

@@ -3,7 +3,7 @@
 //! its histogram, in the file's units (`scl_slope`/`scl_inter` applied).
 //! The files are written here byte by byte (a NIfTI-1 header is 348 fixed
 //! fields), so each datatype code is exercised as a file in the wild has it.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_core::Axis;

@@ -1,6 +1,6 @@
 //! Tracings on slices of several orientations through the server: one
 //! result that honours every drawn slice of every axis.
-mod common;
+use crate::common;
 
 use common::*;
 use interslice_core::Axis;

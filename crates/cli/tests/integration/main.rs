@@ -1,0 +1,21 @@
+//! The `interslice` command line, run as a user runs it: one module per command
+//! (and the reference cross-checks), all in one test binary.
+//!
+//! One binary, not one per file: each test binary links every dependency,
+//! and on two cores linking and monomorphising them per file cost minutes
+//! of every test run.
+mod common;
+mod contours_cli;
+mod evaluate_cli;
+mod interpolate_cli;
+mod interpolate_image_cli;
+mod interpolate_orientations_cli;
+mod mesh_cli;
+mod phantom_cli;
+mod refs_metrics;
+mod refs_thresholds;
+mod segment_cli;
+mod server_cli;
+mod server_stop;
+mod study_cli;
+mod variability_cli;
