@@ -2,12 +2,8 @@
 //! the image-guided method is the default with an image, drawn slices are
 //! kept, the confidence volume is written on the same grid, and an image off
 //! the tracing's grid or an image method without an image is a one-line error.
+use crate::common::{assert_one_line_error, bin};
 use interslice_core::{AnyVolume, Axis, Geometry, LabelVolume, LengthUnit, Volume};
-
-// Shared helpers; this file uses the binary and the error check only.
-#[allow(dead_code)]
-use crate::common;
-use common::{assert_one_line_error, bin};
 
 /// A ball (label 1) and an image that shows it (bright inside).
 fn case() -> (LabelVolume, Volume<f32>) {

@@ -3,10 +3,7 @@
 //! drawn slice reproduced, drawn-empty ones included), better than the z
 //! contours alone; contradicting crossings and an unknown axis are one-line
 //! errors.
-#[allow(dead_code)]
-use crate::common;
-
-use common::{assert_one_line_error, bin};
+use crate::common::{assert_one_line_error, bin};
 use interslice_core::contour::Contour;
 use interslice_core::contour_file::{self, ContourFile, DrawnEmpty};
 use interslice_core::trace::{mask_polygons, signed_area};

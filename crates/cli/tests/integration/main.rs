@@ -1,9 +1,9 @@
 //! The `interslice` command line, run as a user runs it: one module per command
 //! (and the reference cross-checks), all in one test binary.
 //!
-//! One binary, not one per file: each test binary links every dependency,
-//! and on two cores linking and monomorphising them per file cost minutes
-//! of every test run.
+//! One binary, not one per file: each test binary links every dependency
+//! and monomorphises its generic code again; the four crates' 43 binaries
+//! took 346–398 crate-seconds of a cold build, these four 295.
 mod common;
 mod contours_cli;
 mod evaluate_cli;

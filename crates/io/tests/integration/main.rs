@@ -2,9 +2,9 @@
 //! round trips, DICOM, wide voxel types, errors, hostile files and the
 //! mutation test, all in one test binary.
 //!
-//! One binary, not one per file: each test binary links every dependency,
-//! and on two cores linking and monomorphising them per file cost minutes
-//! of every test run.
+//! One binary, not one per file: each test binary links every dependency
+//! and monomorphises its generic code again; the four crates' 43 binaries
+//! took 346–398 crate-seconds of a cold build, these four 295.
 mod dicom;
 mod errors;
 mod golden;

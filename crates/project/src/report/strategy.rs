@@ -208,16 +208,23 @@ impl Simulation<'_> {
     ) -> Result<Vec<usize>, ProjectError> {
         let uniform = uniform_slices(s.first, s.last, budget);
         let (g, u) = (self.score(s, greedy)?.1, self.score(s, &uniform)?.1);
-        let start = if g >= u { greedy.to_vec() } else { uniform };
-        self.refine(s, start)
+        if g >= u {
+            self.refine(s, greedy.to_vec(), g)
+        } else {
+            self.refine(s, uniform, u)
+        }
     }
 
-    /// Local search on the whole-volume Dice: each inner traced slice is
-    /// moved by one or two slices either way (staying between its
-    /// neighbours) where that raises the Dice, until no move does (at most
-    /// four passes over the slices).
-    fn refine(&self, s: &Structure, mut traced: Vec<usize>) -> Result<Vec<usize>, ProjectError> {
-        let mut best = self.score(s, &traced)?.1;
+    /// Local search on the whole-volume Dice, from `traced` of Dice `best`:
+    /// each inner traced slice is moved by one or two slices either way
+    /// (staying between its neighbours) where that raises the Dice, until no
+    /// move does (at most four passes over the slices).
+    fn refine(
+        &self,
+        s: &Structure,
+        mut traced: Vec<usize>,
+        mut best: f64,
+    ) -> Result<Vec<usize>, ProjectError> {
         for _ in 0..4 {
             let mut moved = false;
             for i in 1..traced.len().saturating_sub(1) {

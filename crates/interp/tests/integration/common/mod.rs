@@ -1,6 +1,4 @@
 //! Shapes and measures shared by the interpolation tests.
-// Each test file uses a different subset of these helpers.
-#![allow(dead_code)]
 use interslice_core::{Axis, Geometry, LengthUnit, Mask, Volume};
 
 /// A mask from an implicit shape in physical coordinates of voxel centres.

@@ -1,5 +1,4 @@
 //! A project folder with small synthetic cells and a server on loopback.
-#![allow(dead_code)]
 
 use interslice_server::{Config, RunningServer};
 use interslice_test_support::client::{Answer, Client};
