@@ -239,9 +239,12 @@ pub fn pieces_apart(compact: &Compact) -> bool {
         return false;
     }
     gaps.sort_unstable();
-    if gaps[gaps.len() / 2] < WIDE_GAP {
-        return false;
-    }
+    gaps[gaps.len() / 2] >= WIDE_GAP && drawn_field(compact)
+}
+
+/// Whether the drawn slices of a compact stack are a field of pieces
+/// ([`field_of_pieces`]).
+pub fn drawn_field(compact: &Compact) -> bool {
     let g = compact.mask.geometry();
     let (a, b) = compact.axis.in_plane();
     let slices: Vec<Vec<bool>> = (0..compact.real.len()).map(|p| compact.truth(p)).collect();

@@ -66,17 +66,18 @@ fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
 
 /// On ITK's example T1 (Debian `insighttoolkit5-examples`), its k-means
 /// classes traced on every other slice: where the band fusion cannot use
-/// the image (class 2: the shape's held-out error is the same with it), the
-/// random walk in the prior's band wins the leave-one-out and the skipped
-/// slices; on every class the image-guided method stays level with the
-/// shape or ahead.
+/// the image (classes 2 and 3: the shape's held-out error is the same with
+/// it), the random walk wins the leave-one-out and the skipped slices (on
+/// the whole box: the classes are fields of pieces, see
+/// `BOX_WALK_MIN_GAP`); on every class the image-guided method stays level
+/// with the shape or ahead.
 #[test]
 fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_better() {
     let Some(dir) = data_dir() else { return };
     let (labels, guided) = t1(&dir);
     // Measured at k = 1 (skipped-slice Dice, shape-auto / image-guided):
-    // 0.9785 / 0.9785, 0.7488 / 0.8063 (the walk), 0.6926 / 0.6926,
-    // 0.4834 / 0.5873, 0.6302 / 0.7641, 0.7481 / 0.8456.
+    // 0.9785 / 0.9828, 0.7488 / 0.8079 (the walk), 0.6926 / 0.7736 (the
+    // walk), 0.4834 / 0.5873, 0.6302 / 0.7641, 0.7481 / 0.8456.
     for class in 1..=6u16 {
         let mask = labels.map(|l| l == class);
         let s = score(&ShapeAuto, &mask, Axis::Z, 1)
@@ -86,10 +87,10 @@ fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_bett
         let g = score(&guided, &mask, Axis::Z, 1).unwrap().unwrap().skipped;
         println!("T1 class {class} k=1: shape-auto {s:.4}, image-guided {g:.4}");
         assert!(g >= s - 0.005, "class {class}: {g} vs {s}");
-        if class == 2 {
+        if class == 2 || class == 3 {
             assert!(
                 g > s + 0.03,
-                "class 2: the walk must beat the shape: {g} vs {s}"
+                "class {class}: the walk must beat the shape: {g} vs {s}"
             );
         }
     }
@@ -107,7 +108,7 @@ fn on_the_t1_classes_the_walk_takes_over_across_wider_gaps() {
     let Some(dir) = data_dir() else { return };
     let (labels, guided) = t1(&dir);
     // Measured (skipped-slice Dice, the plan without the walk / with it):
-    // k = 3 class 1 0.9714 / 0.9777, class 2 0.6836 / 0.7656; k = 5
+    // k = 3 class 1 0.9714 / 0.9777, class 2 0.6938 / 0.7642; k = 5
     // 0.965 / 0.972, 0.657 / 0.735; k = 9 0.954 / 0.963, 0.589 / 0.674.
     for (class, k, walk, gain) in [
         (1u16, 3, Walk::Box, 0.004),
