@@ -500,6 +500,7 @@ impl ImageGuided {
                     let z = walked
                         .logit(real, &plane)
                         .unwrap_or_else(|| vec![-0.5; plane.len()]);
+                    let z = walk::undiluted(z, phi);
                     (separate(phi, &z, &plane, reach(*delta)), z)
                 })
                 .unzip();
@@ -653,7 +654,7 @@ impl ImageGuided {
             prior,
             (confidence, plan.scale),
             |s, delta, phi| {
-                let z = walked.logit(s, &plane)?;
+                let z = walk::undiluted(walked.logit(s, &plane)?, phi);
                 let reach = if boxed {
                     f32::INFINITY
                 } else {
