@@ -377,7 +377,7 @@ fn walk(
 }
 
 /// Share of the shape prior's area on a skipped slice below which the
-/// walk's decision there is taken as diluted ([`undiluted`]).
+/// walk's decision there is taken as diluted (`undiluted`).
 pub const DILUTED: f64 = 0.8;
 
 /// The walk's logits `z` on one skipped slice, raised by one constant where
