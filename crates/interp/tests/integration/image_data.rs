@@ -76,7 +76,7 @@ fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_bett
     let Some(dir) = data_dir() else { return };
     let (labels, guided) = t1(&dir);
     // Measured at k = 1 (skipped-slice Dice, shape-auto / image-guided):
-    // 0.9785 / 0.9828, 0.7488 / 0.8079 (the walk), 0.6926 / 0.7736 (the
+    // 0.9785 / 0.9839, 0.7488 / 0.8169 (the walk), 0.6926 / 0.7907 (the
     // walk), 0.4834 / 0.5873, 0.6302 / 0.7641, 0.7481 / 0.8456.
     for class in 1..=6u16 {
         let mask = labels.map(|l| l == class);
@@ -108,9 +108,9 @@ fn on_the_t1_classes_the_walk_takes_over_across_wider_gaps() {
     let Some(dir) = data_dir() else { return };
     let (labels, guided) = t1(&dir);
     // Measured (skipped-slice Dice, the plan without the walk / with it):
-    // k = 3 class 1 0.9714 / 0.9777, class 2 0.6938 / 0.7642, class 3
-    // 0.5939 / 0.6817; k = 5 0.965 / 0.972, 0.657 / 0.735; k = 9
-    // 0.954 / 0.963, 0.589 / 0.687, 0.414 / 0.557.
+    // k = 3 class 1 0.9714 / 0.9784, class 2 0.6938 / 0.7736, class 3
+    // 0.5939 / 0.6985; k = 5 0.965 / 0.973, 0.657 / 0.746; k = 9
+    // 0.954 / 0.964, 0.589 / 0.700, 0.414 / 0.565.
     for (class, k, walk, gain) in [
         (1u16, 3, Walk::Box, 0.004),
         (2, 3, Walk::Box, 0.05),
