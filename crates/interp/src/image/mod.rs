@@ -242,7 +242,7 @@ pub struct Plan {
     pub prior_error: (f32, f64),
     /// The drawn slices are a field of pieces
     /// ([`crate::auto::field_of_pieces`]): the whole-box walk's pixels are
-    /// not kept apart per object there ([`walk_mask`]).
+    /// not kept apart per object there (`walk_mask`).
     pub field: bool,
     model: Option<IntensityModel>,
 }
