@@ -120,7 +120,8 @@ pub const BOX_WALK_GATE: f64 = 1.25;
 /// from one drawn slice to the next, so the shape is not nearly exact next
 /// to a drawn slice, and held out across twice the gap its thin pieces
 /// collapse in the walk as they do across wide gaps. On the T1 k-means
-/// classes at k = 1 and 2 the walk then took classes 1, 2 and 3 (class 3:
+/// classes at k = 1 and 2 the walk then took classes 1, 2 and 3 (before
+/// `walk::undiluted` and [`Plan::field`]; class 3:
 /// 0.6926 → 0.7736 and 0.6623 → 0.7276 on the skipped slices, level with
 /// the walker anchor's 0.7919 and 0.7411; class 1 +0.004 and +0.006) and
 /// lost nowhere (class 2 at k = 2: −0.0001), for 0.5–0.7 s more per class
@@ -525,7 +526,7 @@ impl ImageGuided {
         let (banded, band_logits) = decided(&walked, &in_band);
         plan.walk_dice = (fused, banded, f64::NAN);
         let widest = compact.real.windows(2).map(|w| w[1] - w[0]).max();
-        let wide = widest >= Some(BOX_WALK_MIN_GAP) || drawn_field(compact);
+        let wide = widest >= Some(BOX_WALK_MIN_GAP) || field;
         let rho = if wide { 1.0 } else { WALK_RHO };
         let clears = |walk: f64, than: f64| walk > than + MARGIN && 1.0 - walk < rho * (1.0 - than);
         if clears(banded, fused) {
