@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Tests the Python package in python/: lints its Rust crate, builds the wheel
+# Tests the Python package in python/ (its Rust crate is a workspace member,
+# formatted and linted with the rest by scripts/test.sh): builds the wheel
 # with maturin, installs it with the napari extra into a venv under the
 # target dir, and runs its pytest suite (round trips through every format,
 # evaluate and interpolate against the command line, errors, the GIL, and
@@ -52,11 +53,6 @@ if ! qt_ok; then
     exit 1
   fi
 fi
-
-echo "== python/: cargo fmt, clippy"
-export PYO3_PYTHON="$py"
-cargo fmt -p interslice-python --check
-cargo clippy -q -p interslice-python --all-targets -- -D warnings
 
 echo "== python/: wheel"
 # The dev profile (optimised dependencies, as in the workspace) reuses what

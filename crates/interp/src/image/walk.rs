@@ -407,11 +407,12 @@ pub(crate) fn undiluted(mut z: Vec<f32>, phi: &[f32]) -> Vec<f32> {
     if target == 0 || now as f64 >= DILUTED * target as f64 {
         return z;
     }
-    let mut sorted = z.clone();
-    sorted.sort_unstable_by(|a, b| b.total_cmp(a));
     // Just above the target-th highest logit's negative: that pixel and
     // every higher one end above zero.
-    let lift = 1e-4 - sorted[target.min(sorted.len()) - 1];
+    let mut order = z.clone();
+    let nth = target.min(order.len()) - 1;
+    let (_, &mut at, _) = order.select_nth_unstable_by(nth, |a, b| b.total_cmp(a));
+    let lift = 1e-4 - at;
     z.iter_mut().for_each(|v| *v += lift);
     z
 }
