@@ -19,7 +19,7 @@ pub fn methods() -> Vec<Box<dyn Interpolator>> {
         Box::new(crate::linear::Linear),
         Box::new(crate::aligned::ShapeAligned::default()),
         Box::new(crate::nearest::Nearest),
-        Box::new(crate::auto::ShapeAuto),
+        Box::new(crate::auto::ShapeAuto::default()),
     ];
     // The four mesh-based methods of the original system.
     all.extend(crate::mesh::mesh_methods());

@@ -3,7 +3,8 @@
 //!
 //! Per label:
 //! 1. **Shape prior.** [`ShapeAuto`]'s leave-one-out choice of shape method
-//!    interpolates the label; its signed distance on each skipped slice is
+//!    interpolates the label, copying across the gaps where the outline
+//!    jumps ([`fill`]); its signed distance on each skipped slice is
 //!    the prior.
 //! 2. **How the boundary sits on the image.** The intensities just inside
 //!    and just outside the tracing on the drawn slices give a log-likelihood
@@ -46,7 +47,7 @@ pub mod fuse;
 pub mod model;
 pub mod walk;
 
-use crate::auto::{Choice, ShapeAuto, candidates, drawn_field};
+use crate::auto::{Choice, ShapeAuto, drawn_field, fill};
 use crate::confidence::{shape_confidence, sigmoid};
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
@@ -184,11 +185,12 @@ type Case<'a> = (Vec<bool>, Vec<f32>, &'a [f32], f64);
 #[derive(Debug, Clone)]
 pub struct ImageGuided {
     image: Arc<Volume<f32>>,
-    /// Whether leave-one-out may choose the random walk
-    /// ([`Plan::walk`]): not on a compact stack of drawn slices
-    /// ([`Interpolator::for_stack`]), which holds no image between them
-    /// for a walker to follow.
-    walks: bool,
+    /// Whether this runs on a compact stack of drawn slices
+    /// ([`Interpolator::for_stack`]): leave-one-out does not try the random
+    /// walk there ([`Plan::walk`]), as the stack holds no image between the
+    /// drawn slices for a walker to follow, and the prior does not copy
+    /// across jumps ([`fill`]), as `shape-auto` on a stack does not.
+    on_stack: bool,
     /// A plan already made ([`ImageGuided::with_plan`]) for the input along
     /// this axis with these drawn slices, used instead of planning again.
     planned: Option<(Axis, Vec<usize>, Plan)>,
@@ -214,7 +216,7 @@ pub enum Walk {
 /// What leave-one-out decided for one label.
 #[derive(Debug, Clone)]
 pub struct Plan {
-    /// Index of the shape prior in [`candidates`].
+    /// Index of the shape prior in [`crate::auto::candidates`].
     pub prior: usize,
     /// The chosen fusion (`w = 0`: shape only).
     pub params: Params,
@@ -275,7 +277,7 @@ impl ImageGuided {
     pub fn new(image: Arc<Volume<f32>>) -> ImageGuided {
         ImageGuided {
             image,
-            walks: true,
+            on_stack: false,
             planned: None,
         }
     }
@@ -300,7 +302,7 @@ impl ImageGuided {
         input.validate()?;
         check_grid(&self.image, input)?;
         let plane = Plane::of(input);
-        let choice = ShapeAuto.choose(input)?;
+        let choice = ShapeAuto::default().choose(input)?;
         let prior = choice.index;
         let shape_only = Params {
             w: 0.0,
@@ -338,7 +340,7 @@ impl ImageGuided {
         let (compact, held) = (&choice.compact, &choice.held);
         if held.is_empty() {
             let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
-            if self.walks && sep >= EDGE_SEPARATION {
+            if !self.on_stack && sep >= EDGE_SEPARATION {
                 plan.walk = Walk::Box;
             }
             return Ok(plan);
@@ -427,7 +429,7 @@ impl ImageGuided {
             })
             .collect();
         plan.scale = best_scale(&SCALES, logits.iter().map(|(z, t)| (z, *t)));
-        if self.walks {
+        if !self.on_stack {
             self.try_walk(input, &choice, &cases, &mut plan)?;
         }
         Ok(plan)
@@ -471,7 +473,7 @@ impl ImageGuided {
         }
         let mut held_input = SparseMask::new(&sparse, input.axis, &kept);
         held_input.cancel = input.cancel;
-        let prior = candidates()[plan.prior].interpolate(held_input)?;
+        let prior = fill(plan.prior, held_input, false)?;
         let flat = IntensityModel::flat();
         let model = plan.model.as_ref().unwrap_or(&flat);
         let ours: Vec<Vec<bool>> = odd
@@ -562,7 +564,7 @@ impl ImageGuided {
             _ => self.plan(input)?,
         };
         input.check_cancelled()?;
-        let prior = candidates()[plan.prior].interpolate(*input)?;
+        let prior = fill(plan.prior, *input, !self.on_stack)?;
         if plan.walk != Walk::Off
             && let Some(walked) = self.run_walk(input, &prior, &plan, confidence)?
         {
@@ -727,7 +729,7 @@ impl Interpolator for ImageGuided {
     ) -> Result<Option<Box<dyn Interpolator>>, InterpError> {
         let stacked = crate::loo::stack(&self.image, axis, real)?;
         Ok(Some(Box::new(ImageGuided {
-            walks: false,
+            on_stack: true,
             ..ImageGuided::new(Arc::new(stacked))
         })))
     }

@@ -249,7 +249,7 @@ fn leave_one_out_keeps_the_shape_where_the_image_is_noise() {
     assert_eq!(plan.params.w, 0.0, "{plan:?}");
     assert_eq!(
         m.interpolate(input).unwrap(),
-        ShapeAuto.interpolate(input).unwrap()
+        ShapeAuto::default().interpolate(input).unwrap()
     );
 }
 
@@ -280,7 +280,7 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
         let (mut shape_sum, mut image_sum) = (0.0, 0.0);
         for (i, (mask, img)) in cases.iter().enumerate() {
             let guided = ImageGuided::new(img.clone());
-            let s = score(&ShapeAuto, mask, Axis::Z, k)
+            let s = score(&ShapeAuto::default(), mask, Axis::Z, k)
                 .unwrap()
                 .unwrap()
                 .skipped;
@@ -325,7 +325,7 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
     let plan = clear.plan(&input).unwrap();
     assert_eq!(plan.walk, Walk::Box);
     let walked = clear.interpolate(input).unwrap();
-    let shaped = ShapeAuto.interpolate(input).unwrap();
+    let shaped = ShapeAuto::default().interpolate(input).unwrap();
     let (w, s) = (
         dice_on(&walked, &truth, Axis::Z, &skipped),
         dice_on(&shaped, &truth, Axis::Z, &skipped),

@@ -46,7 +46,7 @@ fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
     // the image's gain on the held-out slices does not clear the bar). The
     // floors keep both honest.
     for (k, floor) in [(1usize, 0.90), (3, 0.81), (5, 0.745), (9, 0.73)] {
-        let s = score(&ShapeAuto, &mask, Axis::Z, k)
+        let s = score(&ShapeAuto::default(), &mask, Axis::Z, k)
             .unwrap()
             .unwrap()
             .skipped;
@@ -80,7 +80,7 @@ fn on_the_t1_classes_the_walk_takes_over_where_it_predicts_the_drawn_slices_bett
     // walk), 0.4834 / 0.5873, 0.6302 / 0.7641, 0.7481 / 0.8456.
     for class in 1..=6u16 {
         let mask = labels.map(|l| l == class);
-        let s = score(&ShapeAuto, &mask, Axis::Z, 1)
+        let s = score(&ShapeAuto::default(), &mask, Axis::Z, 1)
             .unwrap()
             .unwrap()
             .skipped;
