@@ -50,6 +50,7 @@
 //! are an allocation (`allocate`): on a structure of a few slices the slices
 //! next to its ends first (`caps_first`), then each slice to the gap whose
 //! expected error it lowers most, spread evenly in its gap.
+use crate::area_profile::{fit_slices, parabola};
 use crate::auto::field_of_pieces;
 use crate::labels::{DrawnLabels, sorted_drawn};
 use crate::loo::Compact;
@@ -380,17 +381,10 @@ fn bulge_density(drawn: &[usize], areas: &[f64]) -> Vec<f64> {
         if !shows(g) || !shows(g + 1) {
             continue;
         }
-        let left = (g >= 1 && shows(g - 1)).then(|| [g - 1, g, g + 1]);
-        let right = (g + 2 < n && shows(g + 2)).then(|| [g, g + 1, g + 2]);
         let (a, b) = (drawn[g], drawn[g + 1]);
         let floor = areas[g].min(areas[g + 1]) / 2.0;
         for t in a + 1..b {
-            let nearer_a = t - a <= b - t;
-            let Some(fit) = (if nearer_a {
-                left.or(right)
-            } else {
-                right.or(left)
-            }) else {
+            let Some(fit) = fit_slices(g, n, t - a <= b - t, shows) else {
                 continue;
             };
             let (area, slope, curve) = parabola(
@@ -402,18 +396,6 @@ fn bulge_density(drawn: &[usize], areas: &[f64]) -> Vec<f64> {
         }
     }
     out
-}
-
-/// The parabola through `(z[i], y[i])` at `x`: its value, slope and
-/// (constant) second derivative.
-fn parabola(z: [f64; 3], y: [f64; 3], x: f64) -> (f64, f64, f64) {
-    // Newton's divided differences.
-    let d01 = (y[1] - y[0]) / (z[1] - z[0]);
-    let d12 = (y[2] - y[1]) / (z[2] - z[1]);
-    let c = (d12 - d01) / (z[2] - z[0]);
-    let value = y[0] + d01 * (x - z[0]) + c * (x - z[0]) * (x - z[1]);
-    let slope = d01 + c * (2.0 * x - z[0] - z[1]);
-    (value, slope, 2.0 * c)
 }
 
 /// Rank the undrawn slices of `sparse` between its outermost drawn slices:

@@ -7,6 +7,7 @@
 
 pub mod advise;
 pub mod aligned;
+pub mod area_profile;
 pub mod auto;
 pub mod confidence;
 pub mod crop;
@@ -23,6 +24,7 @@ pub mod predict;
 pub mod protocol;
 pub mod registry;
 pub mod sdf;
+pub mod shape_area;
 pub mod shape_based;
 pub mod shape_cubic;
 pub mod slices;

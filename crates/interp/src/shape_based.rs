@@ -56,19 +56,27 @@ impl Interpolator for ShapeBased {
         input.validate()?;
         let plane = Plane::of(&input);
         let sdfs = drawn_sdfs(&input, &plane, 0)?;
-        let drawn = input.drawn;
         assemble(&input, |s| {
-            let g = bracket(drawn, s)?;
-            let (a, b) = (drawn[g], drawn[g + 1]);
-            let t = ((s - a) as f64 / (b - a) as f64) as f32;
-            let da = sdfs[g].as_ref().expect("gap border");
-            let db = sdfs[g + 1].as_ref().expect("gap border");
-            Some(
-                da.iter()
-                    .zip(db.iter())
-                    .map(|(&x, &y)| (1.0 - t) * x + t * y < 0.0)
-                    .collect(),
-            )
+            let (_, field) = blended(&sdfs, input.drawn, s)?;
+            Some(field.iter().map(|&v| v < 0.0).collect())
         })
     }
+}
+
+/// The blended distance field `(1 − t) d_A + t d_B` on skipped slice `s`
+/// at fraction `t` of the gap between drawn slices A and B, with the gap's
+/// index (`None` outside the drawn range): inside where it is below zero.
+/// `sdfs` from [`drawn_sdfs`].
+pub fn blended(sdfs: &[Option<Map>], drawn: &[usize], s: usize) -> Option<(usize, Vec<f32>)> {
+    let g = bracket(drawn, s)?;
+    let (a, b) = (drawn[g], drawn[g + 1]);
+    let t = ((s - a) as f64 / (b - a) as f64) as f32;
+    let da = sdfs[g].as_ref().expect("gap border");
+    let db = sdfs[g + 1].as_ref().expect("gap border");
+    let field = da
+        .iter()
+        .zip(db.iter())
+        .map(|(&x, &y)| (1.0 - t) * x + t * y)
+        .collect();
+    Some((g, field))
 }

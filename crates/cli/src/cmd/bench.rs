@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "nearest,shape-based,shape-aligned,shape-auto,image-guided,random-walk"
+        default_value = "nearest,shape-based,shape-aligned,shape-area,shape-auto,image-guided,random-walk"
     )]
     pub methods: Vec<String>,
     /// Also print one line per mask.

@@ -1,0 +1,75 @@
+//! The area profile of a structure along the axis, from its drawn slices: the
+//! parabola through the areas of a gap's two drawn slices and the drawn slice
+//! beyond the end nearer a skipped slice. A round structure's area changes
+//! along a curve, not a line (`A ∝ R² − z²` towards a pole, `A ∝ z²` along a
+//! cone), and three drawn areas are the fewest that see the curve. Used by
+//! the advice (how fast the shape bends, `crate::advise`) and by
+//! `shape-area` (how much area a skipped slice holds,
+//! [`crate::shape_area`]).
+
+/// The three drawn slices (positions in the drawn list) whose areas fit the
+/// profile at a skipped slice of gap `g` (between drawn slices `g` and
+/// `g + 1`) that is `nearer_start` to drawn slice `g` or not: the gap's two
+/// and the one beyond the nearer end, or beyond the other end when that one
+/// does not show the structure or does not exist. `None` when the gap's own
+/// slices do not both show it (it ends inside the gap) or neither neighbour
+/// does. `shows(i)`: drawn slice `i` shows the structure; `n` drawn slices.
+pub fn fit_slices(
+    g: usize,
+    n: usize,
+    nearer_start: bool,
+    shows: impl Fn(usize) -> bool,
+) -> Option<[usize; 3]> {
+    if g + 1 >= n || !shows(g) || !shows(g + 1) {
+        return None;
+    }
+    let before = (g >= 1 && shows(g - 1)).then(|| [g - 1, g, g + 1]);
+    let after = (g + 2 < n && shows(g + 2)).then(|| [g, g + 1, g + 2]);
+    if nearer_start {
+        before.or(after)
+    } else {
+        after.or(before)
+    }
+}
+
+/// The parabola through `(z[i], y[i])` at `x`: its value, slope and
+/// (constant) second derivative.
+pub fn parabola(z: [f64; 3], y: [f64; 3], x: f64) -> (f64, f64, f64) {
+    // Newton's divided differences.
+    let d01 = (y[1] - y[0]) / (z[1] - z[0]);
+    let d12 = (y[2] - y[1]) / (z[2] - z[1]);
+    let c = (d12 - d01) / (z[2] - z[0]);
+    let value = y[0] + d01 * (x - z[0]) + c * (x - z[0]) * (x - z[1]);
+    let slope = d01 + c * (2.0 * x - z[0] - z[1]);
+    (value, slope, 2.0 * c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_parabola_through_three_points_is_exact_on_a_quadratic() {
+        let f = |x: f64| 3.0 - 2.0 * x + 0.5 * x * x;
+        let z = [1.0, 4.0, 6.0];
+        let (v, s, c) = parabola(z, z.map(f), 2.5);
+        assert!((v - f(2.5)).abs() < 1e-12);
+        assert!((s - (-2.0 + 2.5)).abs() < 1e-12);
+        assert!((c - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_fit_takes_the_slice_beyond_the_nearer_end_that_shows_the_structure() {
+        let all = |_: usize| true;
+        assert_eq!(fit_slices(1, 4, true, all), Some([0, 1, 2]));
+        assert_eq!(fit_slices(1, 4, false, all), Some([1, 2, 3]));
+        // At the ends only one side exists.
+        assert_eq!(fit_slices(0, 4, true, all), Some([0, 1, 2]));
+        assert_eq!(fit_slices(2, 4, false, all), Some([1, 2, 3]));
+        // A neighbour that does not show it is passed over; a gap whose own
+        // slice does not show it, or with no neighbour at all, has no fit.
+        assert_eq!(fit_slices(1, 4, true, |i| i != 0), Some([1, 2, 3]));
+        assert_eq!(fit_slices(1, 4, true, |i| i != 2), None);
+        assert_eq!(fit_slices(0, 2, true, all), None);
+    }
+}
