@@ -4,6 +4,8 @@
 //!
 //! The candidates answer different kinds of tracing: `shape-aligned` (matched,
 //! aligned objects with caps: single or few objects that drift or tilt),
+//! `shape-area` (the blend cut to the area the drawn slices' area profile
+//! says: round structures, and pieces that move apart between drawn slices),
 //! `shape-based` (plain signed-distance blending: ribbons and porous shapes
 //! whose pieces do not correspond one to one) and `nearest` (copies: fields of
 //! many small objects that appear and vanish between drawn slices). The
@@ -29,6 +31,7 @@ use crate::crop::AXIS_SLICES;
 use crate::loo::{Compact, HeldOut};
 use crate::nearest::Nearest;
 use crate::sdf::SdfCache;
+use crate::shape_area::ShapeArea;
 use crate::shape_based::ShapeBased;
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
@@ -56,6 +59,7 @@ pub struct ShapeAuto {
 pub fn candidates() -> Vec<Box<dyn Interpolator>> {
     vec![
         Box::new(ShapeAligned { end_caps: false }),
+        Box::new(ShapeArea),
         Box::new(ShapeBased),
         Box::new(Nearest),
     ]
@@ -399,7 +403,7 @@ impl Interpolator for ShapeAuto {
     }
 
     fn description(&self) -> &'static str {
-        "per label, the shape method (aligned, signed-distance blend, nearest copy) that best predicts the drawn slices left out one at a time; no caps past the outermost drawn slices"
+        "per label, the shape method (aligned, area-held blend, signed-distance blend, nearest copy) that best predicts the drawn slices left out one at a time; no caps past the outermost drawn slices"
     }
 
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
