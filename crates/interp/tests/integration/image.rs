@@ -307,14 +307,21 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
 }
 
 /// With two drawn slices nothing can be held out: the whole-box walk is
-/// used where the outlines lie on a clean intensity edge, the shape where
-/// intensity says little about them.
+/// used where the outlines lie on a clean intensity edge and move between
+/// the slices (the prior `shape-aligned`), the shape where intensity says
+/// little about them, or where the two outlines nest (the prior
+/// `shape-area`'s profile of a round structure, which the walk from two
+/// slices does not know).
 #[test]
 fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
-    // A ball whose outline on the two drawn slices differs from the cone
-    // a shape blend would draw between them.
-    let truth = shape([32, 32, 24], [1.0; 3], |p| {
-        in_ellipsoid(p, [16.0, 16.0, 12.0], [10.0, 10.0, 10.0])
+    // A ball sheared along x: its outlines on the two drawn slices overlap
+    // as one outline that moves.
+    let truth = shape([40, 32, 24], [1.0; 3], |p| {
+        in_ellipsoid(
+            [p[0] - 0.4 * (p[2] - 12.0), p[1], p[2]],
+            [20.0, 16.0, 12.0],
+            [10.0, 10.0, 10.0],
+        )
     });
     let drawn = [5usize, 19];
     let sparse = sparse_of(&truth, Axis::Z, &drawn);
@@ -329,6 +336,7 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
         dice_on(&walked, &truth, Axis::Z, &skipped),
         dice_on(&shaped, &truth, Axis::Z, &skipped),
     );
+    eprintln!("sheared: the walk {w:.4} against the shape {s:.4}");
     assert!(w > s + 0.02, "the walk {w:.4} against the shape {s:.4}");
     for &d in &drawn {
         assert_eq!(
@@ -340,4 +348,18 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
     let noisy = ImageGuided::new(image_of(&truth, 800.0));
     assert_eq!(noisy.plan(&input).unwrap().walk, Walk::Off);
     assert_eq!(noisy.interpolate(input).unwrap(), shaped);
+    // The ball upright: its outlines nest, and the shape's profile of a
+    // round structure is kept however clean the edge.
+    let ball = shape([32, 32, 24], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 12.0], [10.0, 10.0, 10.0])
+    });
+    let sparse = sparse_of(&ball, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let clear = ImageGuided::new(image_of(&ball, 5.0));
+    assert_eq!(clear.plan(&input).unwrap().walk, Walk::Off);
+    let shaped = ShapeAuto::default().interpolate(input).unwrap();
+    assert_eq!(clear.interpolate(input).unwrap(), shaped);
+    let s = dice_on(&shaped, &ball, Axis::Z, &skipped);
+    eprintln!("upright: the shape {s:.4}");
+    assert!(s > 0.83, "the shape {s:.4}");
 }
