@@ -15,7 +15,7 @@ pub const IMAGE_METHOD: &str = "image-guided";
 pub fn methods() -> Vec<Box<dyn Interpolator>> {
     let mut all: Vec<Box<dyn Interpolator>> = vec![
         Box::new(crate::shape_based::ShapeBased),
-        Box::new(crate::shape_area::ShapeArea),
+        Box::new(crate::shape_area::ShapeArea::default()),
         Box::new(crate::shape_cubic::ShapeCubic),
         Box::new(crate::linear::Linear),
         Box::new(crate::aligned::ShapeAligned::default()),
