@@ -335,14 +335,11 @@ pub fn jumping_gaps(input: &SparseMask<'_>) -> Result<Vec<usize>, InterpError> {
     if field_of_pieces(&slices, width, height) {
         return Ok(Vec::new());
     }
-    let area = |m: &[bool]| m.iter().filter(|&&x| x).count();
     Ok(slices
         .windows(2)
         .enumerate()
         .filter(|(_, pair)| {
-            let (a, b) = (&pair[0], &pair[1]);
-            let (smaller, larger) = (area(a).min(area(b)), area(a).max(area(b)));
-            let shared = a.iter().zip(b).filter(|&(&x, &y)| x && y).count();
+            let (shared, smaller, larger) = overlap_counts(&pair[0], &pair[1]);
             smaller > 0
                 && (shared as f64) < APART * smaller as f64
                 && smaller as f64 >= ALIKE * larger as f64
@@ -400,9 +397,10 @@ pub const NESTED: f64 = 0.75;
 /// 0.831 / 0.847 / 0.814, and lung2 at k = 9 (share 0.18, which [`fill`]
 /// copied: 0.503) to 0.716. Outlines that share nothing give the blend
 /// nothing to hold, and each copied where it was traced is as good
-/// (brain1 at k ≥ 5, share 0: 0.436 copied, 0.430 with the profile). An outline that moves between the two slices
-/// (a tilted tube) is `shape-aligned`'s to follow, and `fill` copies its
-/// jumps; the pole profile is not copied over ([`pole_fill`]).
+/// (brain1 at k ≥ 5, share 0: 0.436 copied, 0.430 with the profile). An
+/// outline that moves between the two slices (a tilted tube) is
+/// `shape-aligned`'s to follow, and `fill` copies its jumps; the pole
+/// profile is not copied over ([`pole_fill`]).
 fn two_slices(input: &SparseMask<'_>, on_stack: bool) -> Result<usize, InterpError> {
     let name = match showing_pair(input)? {
         Some(share) if share < DISJOINT || (APART..NESTED).contains(&share) => "shape-aligned",
@@ -428,9 +426,16 @@ fn showing_pair(input: &SparseMask<'_>) -> Result<Option<f64>, InterpError> {
     let [a, b] = &showing[..] else {
         return Ok(None);
     };
+    let (shared, smaller, _) = overlap_counts(a, b);
+    Ok(Some(shared as f64 / smaller as f64))
+}
+
+/// Pixels two outlines share, and the areas of the smaller and the larger.
+fn overlap_counts(a: &[bool], b: &[bool]) -> (usize, usize, usize) {
     let area = |m: &[bool]| m.iter().filter(|&&x| x).count();
     let shared = a.iter().zip(b).filter(|&(&x, &y)| x && y).count();
-    Ok(Some(shared as f64 / area(a).min(area(b)) as f64))
+    let (x, y) = (area(a), area(b));
+    (shared, x.min(y), x.max(y))
 }
 
 /// Whether `fill` with candidate `index` is `shape-area` on the profile of

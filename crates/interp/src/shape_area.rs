@@ -26,8 +26,9 @@
 //! between took the skipped slices from 0.805 / 0.771 / 0.644 to 0.831 /
 //! 0.829 / 0.811 (the phantom, stardist and the T1 classes moved by at most
 //! 0.003). Between drawn slices on both sides the area is kept between
-//! half the smaller and twice the larger of the gap's two drawn areas: three drawn areas that swing wildly (an outline
-//! that jumps) should not empty or flood a slice. Gaps with a drawn slice
+//! half the smaller and twice the larger of the gap's two drawn areas:
+//! three drawn areas that swing wildly (an outline that jumps) should not
+//! empty or flood a slice. Gaps with a drawn slice
 //! that does not show the structure are coned as `shape-based` cones them.
 //!
 //! Measured with `interslice bench` (`docs/interpolation.md`).
@@ -84,20 +85,16 @@ impl Interpolator for ShapeArea {
         let plane = Plane::of(&input);
         let sdfs = drawn_sdfs(&input, &plane, 0)?;
         let drawn = input.drawn;
-        let mut areas = Vec::with_capacity(drawn.len());
-        for &d in drawn {
-            let slice = input.mask.slice(input.axis, d)?;
-            areas.push(slice.iter().filter(|&&x| x).count() as f64);
-        }
+        let areas = drawn_areas(&input)?;
         let n = drawn.len();
-        let showing = areas.iter().filter(|&&x| x > 0.0).count();
+        let pole = self.pole && pole_pair(drawn, &areas, &plane);
         assemble(&input, |s| {
             let (g, field) = blended(&sdfs, drawn, s)?;
             let (a, b) = (drawn[g], drawn[g + 1]);
             let fit = fit_slices(g, n, s - a <= b - s, |i| areas[i] > 0.0);
             let (lo, hi) = (areas[g].min(areas[g + 1]), areas[g].max(areas[g + 1]));
             let Some(fit) = fit else {
-                if self.pole && lo > 0.0 && showing == 2 && polar_caps(hi, b - a, &plane) {
+                if pole && lo > 0.0 {
                     let target = pole_area(areas[g], areas[g + 1], b - a, s - a);
                     return Some(cut_to_area(&field, target.round() as usize));
                 }
@@ -156,22 +153,34 @@ fn pole_area(a: f64, b: f64, l: usize, t: usize) -> f64 {
 /// drawn slices show the structure, with areas that can be its polar caps
 /// (`polar_caps`).
 pub fn pole_profile_applies(input: &SparseMask<'_>) -> Result<bool, InterpError> {
-    let mut areas = Vec::new();
-    for &d in input.drawn {
-        let n = input
-            .mask
-            .slice(input.axis, d)?
-            .iter()
-            .filter(|&&x| x)
-            .count();
-        if n > 0 {
-            areas.push((d, n as f64));
-        }
-    }
-    let [(a, x), (b, y)] = areas[..] else {
-        return Ok(false);
+    Ok(pole_pair(
+        input.drawn,
+        &drawn_areas(input)?,
+        &Plane::of(input),
+    ))
+}
+
+/// Whether exactly two drawn slices show the structure, next to each other
+/// among the drawn slices, with areas that can be its polar caps
+/// (`polar_caps`): the gap between them takes the pole profile.
+fn pole_pair(drawn: &[usize], areas: &[f64], plane: &Plane) -> bool {
+    let showing: Vec<usize> = (0..drawn.len()).filter(|&i| areas[i] > 0.0).collect();
+    let [i, j] = showing[..] else {
+        return false;
     };
-    Ok(polar_caps(x.max(y), b - a, &Plane::of(input)))
+    j == i + 1 && polar_caps(areas[i].max(areas[j]), drawn[j] - drawn[i], plane)
+}
+
+/// The pixels inside the structure on each drawn slice of `input`.
+fn drawn_areas(input: &SparseMask<'_>) -> Result<Vec<f64>, InterpError> {
+    input
+        .drawn
+        .iter()
+        .map(|&d| {
+            let slice = input.mask.slice(input.axis, d)?;
+            Ok(slice.iter().filter(|&&x| x).count() as f64)
+        })
+        .collect()
 }
 
 /// Whether drawn areas up to `larger` pixels can be the polar caps of a
