@@ -5,9 +5,10 @@ Usage: random_walker_anchor.py [--data DIR] [--skips 1,3,5,9] [--beta 130] [--t1
 
 Runs scikit-image's `random_walker` on the intensity volume, seeded by the
 drawn slices (inside the tracing: label 1, the rest of each drawn slice:
-label 2), under the protocol of `interslice bench`: each mask cropped to its
-box grown by 8 voxels, the first and last non-empty z slices and every
-(k+1)-th slice from the first drawn, Dice on the skipped slices only. This is
+label 2), under the protocol of `interslice bench` (`devdata.py`: each mask
+cropped to its box grown by 8 voxels, the first and last non-empty z slices
+and every (k+1)-th slice from the first drawn, Dice on the skipped slices
+only). This is
 the idea of Biomedisa's smart interpolation and the image anchor of the
 interpolation benchmark; compare its rows with `interslice bench --per-mask`.
 The data come from `scripts/fetch-interp-data.sh` (DIR, default
@@ -23,38 +24,7 @@ from pathlib import Path
 import numpy as np
 from skimage.segmentation import random_walker
 
-import interslice
-
-MARGIN = 8
-
-
-def cases(data, t1):
-    """(name, mask, image) of every development mask with an image."""
-    sd = data / "stardist"
-    if (sd / "mask3d.tif").is_file():
-        lab, _ = interslice.read(sd / "mask3d.tif")
-        img, _ = interslice.read(sd / "img3d.tif")
-        yield "stardist-all", lab > 0, img
-    pr = data / "pyradiomics"
-    for name in ["lung1", "lung2", "brain1", "brain2", "breast1"]:
-        if (pr / f"{name}_label.nrrd").is_file():
-            lab, _ = interslice.read(pr / f"{name}_label.nrrd")
-            img, _ = interslice.read(pr / f"{name}_image.nrrd")
-            yield name, lab > 0, img
-    itk = data / "itk"
-    if t1 and (itk / "T1_kmeans.nii.gz").is_file():
-        lab, _ = interslice.read(itk / "T1_kmeans.nii.gz")
-        img, _ = interslice.read(itk / "T1.nii.gz")
-        for c in sorted(set(np.unique(lab)) - {0}):
-            yield f"T1-class{c}", lab == c, img
-
-
-def cropped(mask, img):
-    idx = np.argwhere(mask)
-    lo = np.maximum(idx.min(0) - MARGIN, 0)
-    hi = np.minimum(idx.max(0) + MARGIN + 1, mask.shape)
-    box = tuple(slice(a, b) for a, b in zip(lo, hi))
-    return mask[box], img[box].astype(np.float32)
+from devdata import cases, cropped, dice_skipped, drawn_and_skipped
 
 
 def main():
@@ -70,23 +40,16 @@ def main():
     for name, mask, img in cases(args.data, args.t1):
         mask, img = cropped(mask, img)
         img = (img - img.mean()) / (img.std() + 1e-9)
-        zs = [z for z in range(mask.shape[2]) if mask[:, :, z].any()]
-        first, last = zs[0], zs[-1]
         scores, secs = [], []
         for k in skips:
-            drawn = list(range(first, last + 1, k + 1))
-            if drawn[-1] != last:
-                drawn.append(last)
+            drawn, skipped = drawn_and_skipped(mask, k)
             seeds = np.zeros(mask.shape, np.int32)
             for z in drawn:
                 seeds[:, :, z] = np.where(mask[:, :, z], 1, 2)
             t = time.perf_counter()
             rw = random_walker(img, seeds, beta=args.beta, mode="cg_j", tol=1e-3) == 1
             secs.append(time.perf_counter() - t)
-            skipped = [z for z in range(first, last + 1) if z not in drawn]
-            a, b = rw[:, :, skipped], mask[:, :, skipped]
-            total = a.sum() + b.sum()
-            scores.append(2 * (a & b).sum() / total if total else 1.0)
+            scores.append(dice_skipped(rw, mask, skipped))
         cells = " | ".join(f"{d:.4f}" for d in scores)
         print(f"| {name} | {cells} | {np.mean(secs):.1f} |", flush=True)
 

@@ -28,11 +28,13 @@
 //! that ends inside a gap), where the tracing says the object stops.
 use crate::aligned::ShapeAligned;
 use crate::crop::AXIS_SLICES;
+use crate::jump::{APART, fade, jumping_gaps, overlap_counts};
 use crate::loo::{Compact, HeldOut};
 use crate::nearest::Nearest;
 use crate::sdf::SdfCache;
 use crate::shape_area::{ShapeArea, pole_profile_applies};
 use crate::shape_based::ShapeBased;
+use crate::slices::Plane;
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::label_2d;
@@ -47,9 +49,10 @@ pub const MARGIN: f64 = 0.002;
 pub struct ShapeAuto {
     /// Whether this runs on a compact stack of drawn slices
     /// ([`Interpolator::for_stack`]: the leave-one-out of the predicted Dice
-    /// and of the advice). There it does not copy across jumps
-    /// ([`jumping_gaps`]): held out across twice the tracer's gap, more
-    /// outlines jump than on the tracer's own gaps, and copies there made
+    /// and of the advice). There it leaves the gaps across which outlines
+    /// jump ([`jumping_gaps`]) to the candidate: held out across twice the
+    /// tracer's gap, more outlines jump than on the tracer's own gaps, and
+    /// copying the nearer slice there (the jump rule before the fade) made
     /// the predicted Dice of the phantom's cell traced every tenth slice
     /// 0.93 against a true 0.79 (0.87 without).
     on_stack: bool,
@@ -135,7 +138,7 @@ impl ShapeAuto {
             let held = held?;
             if held.is_empty() {
                 // Two drawn slices: nothing to hold out (see `two_slices`),
-                // and `fill` copies if the outlines jump.
+                // and `fill` fades the outlines in place if they jump.
                 return Ok(Choice {
                     index: two_slices(input, self.on_stack)?,
                     scores: Vec::new(),
@@ -289,83 +292,24 @@ pub fn field_of_pieces(slices: &[Vec<bool>], width: usize, height: usize) -> boo
     shown > 0 && pieces as f64 >= MANY_PIECES * shown as f64
 }
 
-/// Two consecutive drawn outlines that share less than this share of the
-/// smaller one have jumped: the gap between them is copied, not blended
-/// ([`jumping_gaps`]).
-pub const APART: f64 = 0.4;
-
-/// Share of the larger outline's area the smaller must hold for two drawn
-/// outlines apart to count as one outline that jumped ([`jumping_gaps`]).
-pub const ALIKE: f64 = 0.25;
-
-/// The gaps (index `i`: between drawn slices `i` and `i + 1`) across which
-/// the outline jumps: both drawn slices show the structure and share less
-/// than [`APART`] of the smaller outline (`|A ∩ B| / min(|A|, |B|)`).
-/// Outlines that far apart are not one outline moving a little from slice
-/// to slice, and a blend of them matches neither; the copy of the nearer
-/// drawn slice keeps each where it was traced. An outline that grows or
-/// shrinks keeps the smaller one inside the larger (a cone: share 1,
-/// blended) however different their areas. A drawn-empty slice is no jump:
-/// the structure ends there, and `shape-aligned` caps it.
-///
-/// Decided from the tracing alone, whatever the leave-one-out chose: with
-/// two drawn slices there is nothing to hold out, and with more the
-/// held-out slices, twice the gap apart, jump for every method. Set on the
-/// development data's tracings of two slices (the thick-slice CT and MR
-/// lesions of `interslice bench` at large skips): the copy was better at
-/// shares of 0.00 and 0.18 (brain1, lung2), the blend at 0.81 and 0.88
-/// (breast1, lung1); at 1.00 (brain2, an outline shrinking to a small one
-/// inside it) the copy was better too, which this rule does not follow.
-/// Applied per gap wherever more slices are drawn, it took brain1 (6.5 mm
-/// slices, the outline jumping by up to 20 pixels) at k = 1–4 from
-/// 0.5233 / 0.3697 / 0.3581 / 0.3023 to 0.5649 / 0.4726 / 0.4141 / 0.4550
-/// on the skipped slices, and changed no other mask.
-///
-/// Not on a field of pieces ([`field_of_pieces`]): there the whole slice's
-/// share says nothing about pieces that do not correspond anyway, and
-/// copying lost on the T1 k-means classes (class 2 −0.004 to −0.011 at
-/// k = 1–7, class 3 −0.018 at k = 2 and 3, class 4 −0.016 at k = 1).
-pub fn jumping_gaps(input: &SparseMask<'_>) -> Result<Vec<usize>, InterpError> {
-    let slices: Vec<Vec<bool>> = input
-        .drawn
-        .iter()
-        .map(|&d| input.mask.slice(input.axis, d))
-        .collect::<Result<_, _>>()?;
-    let (width, height) = input.mask.slice_shape(input.axis);
-    if field_of_pieces(&slices, width, height) {
-        return Ok(Vec::new());
-    }
-    Ok(slices
-        .windows(2)
-        .enumerate()
-        .filter(|(_, pair)| {
-            let (shared, smaller, larger) = overlap_counts(&pair[0], &pair[1]);
-            smaller > 0
-                && (shared as f64) < APART * smaller as f64
-                && smaller as f64 >= ALIKE * larger as f64
-        })
-        .map(|(i, _)| i)
-        .collect())
-}
-
 /// `input` interpolated by candidate `index` of [`candidates`], with
-/// `copy_jumps` the gaps across which the outline jumps
-/// ([`jumping_gaps`]) copied from the nearer drawn slice instead:
-/// `shape-auto`'s result, and `image-guided`'s shape prior. Leave-one-out
-/// runs measure the candidates as they are (`copy_jumps` false).
-pub fn fill(index: usize, input: SparseMask<'_>, copy_jumps: bool) -> Result<Mask, InterpError> {
+/// `fade_jumps` the gaps across which the outline jumps
+/// ([`jumping_gaps`]) filled by each outline fading in place
+/// ([`crate::jump::fade`]) instead: `shape-auto`'s result, and
+/// `image-guided`'s shape prior. Leave-one-out runs measure the candidates
+/// as they are (`fade_jumps` false).
+pub fn fill(index: usize, input: SparseMask<'_>, fade_jumps: bool) -> Result<Mask, InterpError> {
     let mut out = candidates()[index].interpolate(input)?;
-    if !copy_jumps || candidates()[index].name() == Nearest.name() || pole_fill(index, &input)? {
+    if !fade_jumps || candidates()[index].name() == Nearest.name() || pole_fill(index, &input)? {
         return Ok(out);
     }
-    let jumps = jumping_gaps(&input)?;
-    if jumps.is_empty() {
-        return Ok(out);
-    }
-    let copied = Nearest.interpolate(input)?;
-    for i in jumps {
-        for s in input.drawn[i] + 1..input.drawn[i + 1] {
-            out.set_slice(input.axis, s, &copied.slice(input.axis, s)?)?;
+    let plane = Plane::of(&input);
+    for i in jumping_gaps(&input)? {
+        let (a, b) = (input.drawn[i], input.drawn[i + 1]);
+        let from = input.mask.slice(input.axis, a)?;
+        let to = input.mask.slice(input.axis, b)?;
+        for (s, slice) in (a + 1..b).zip(fade(&from, &to, b - a, &plane)) {
+            out.set_slice(input.axis, s, &slice)?;
         }
     }
     Ok(out)
@@ -384,7 +328,7 @@ pub const NESTED: f64 = 0.75;
 /// near the label): `shape-aligned` where exactly two drawn slices show the
 /// structure and their outlines overlap as one outline that moves (the
 /// smaller shares from [`APART`] to [`NESTED`] with the larger), share
-/// next to nothing (under [`DISJOINT`]: `fill` copies them) or are too
+/// next to nothing (under [`DISJOINT`]: `fill` fades them) or are too
 /// large to be a round structure's polar caps
 /// (`shape_area::pole_profile_applies`), or on a leave-one-out stack
 /// (`on_stack`, where the profile does not apply), `shape-area` otherwise.
@@ -396,11 +340,11 @@ pub const NESTED: f64 = 0.75;
 /// 0.676 / 0.771 / 0.536 on the skipped slices with `shape-aligned` to
 /// 0.831 / 0.847 / 0.814, and lung2 at k = 9 (share 0.18, which [`fill`]
 /// copied: 0.503) to 0.716. Outlines that share nothing give the blend
-/// nothing to hold, and each copied where it was traced is as good
-/// (brain1 at k ≥ 5, share 0: 0.436 copied, 0.430 with the profile). An
+/// nothing to hold, and each faded where it was traced is as good
+/// (brain1 at k ≥ 5, share 0: 0.432 faded, 0.430 with the profile). An
 /// outline that moves between the two slices (a tilted tube) is
-/// `shape-aligned`'s to follow, and `fill` copies its jumps; the pole
-/// profile is not copied over ([`pole_fill`]).
+/// `shape-aligned`'s to follow, and `fill` fades its jumps; the pole
+/// profile is not faded over ([`pole_fill`]).
 fn two_slices(input: &SparseMask<'_>, on_stack: bool) -> Result<usize, InterpError> {
     let name = match showing_pair(input)? {
         Some(share) if share < DISJOINT || (APART..NESTED).contains(&share) => "shape-aligned",
@@ -430,17 +374,9 @@ fn showing_pair(input: &SparseMask<'_>) -> Result<Option<f64>, InterpError> {
     Ok(Some(shared as f64 / smaller as f64))
 }
 
-/// Pixels two outlines share, and the areas of the smaller and the larger.
-fn overlap_counts(a: &[bool], b: &[bool]) -> (usize, usize, usize) {
-    let area = |m: &[bool]| m.iter().filter(|&&x| x).count();
-    let shared = a.iter().zip(b).filter(|&(&x, &y)| x && y).count();
-    let (x, y) = (area(a), area(b));
-    (shared, x.min(y), x.max(y))
-}
-
 /// Whether `fill` with candidate `index` is `shape-area` on the profile of
 /// two drawn slices (`shape_area::pole_area`): the whole structure's
-/// bulge, which copying across a jump would throw away.
+/// bulge, which fading across a jump would throw away.
 pub fn pole_fill(index: usize, input: &SparseMask<'_>) -> Result<bool, InterpError> {
     Ok(candidates()[index].name() == ShapeArea::default().name() && pole_profile_applies(input)?)
 }
@@ -578,7 +514,7 @@ mod tests {
     }
 
     #[test]
-    fn gaps_across_which_the_outline_jumps_are_copied_and_others_blended() {
+    fn gaps_across_which_the_outline_jumps_fade_in_place_and_others_blend() {
         let drawn = [0usize, 6];
         let run = |m: &Mask, drawn: &[usize]| {
             let input = SparseMask::new(m, Axis::Z, drawn);
@@ -601,25 +537,22 @@ mod tests {
         let (jumps, out) = run(&cone, &drawn);
         assert!(jumps.is_empty());
         assert!(area(&out, 3) > area(&cone, 0) && area(&out, 3) < area(&cone, 6));
-        // Shifted by 20 (no overlap): copies, each half of the gap its own.
+        // Shifted by 20 (no overlap): each outline fades in place.
         let far = two_discs([(20.0, 6.0), (40.0, 6.0)]);
         let (jumps, out) = run(&far, &drawn);
         assert_eq!(jumps, vec![0]);
-        assert_eq!(
-            out.slice(Axis::Z, 2).unwrap(),
-            far.slice(Axis::Z, 0).unwrap()
-        );
-        assert_eq!(
-            out.slice(Axis::Z, 4).unwrap(),
-            far.slice(Axis::Z, 6).unwrap()
-        );
+        let plane = Plane::of(&SparseMask::new(&far, Axis::Z, &drawn));
+        let faded = fade(&at(&far, 0), &at(&far, 6), 6, &plane);
+        for s in 1..6 {
+            assert_eq!(at(&out, s), faded[s - 1], "slice {s}");
+        }
         // A drawn-empty slice is no jump: the structure ends there.
         let mut ends = far.clone();
         let (w, h) = ends.slice_shape(Axis::Z);
         ends.set_slice(Axis::Z, 6, &vec![false; w * h]).unwrap();
         assert!(run(&ends, &drawn).0.is_empty());
         // Three drawn slices: only the gap across which the outline jumps
-        // is copied, the other one is blended (by `shape-aligned`).
+        // fades, the other one is blended (by `shape-aligned`).
         let g = Geometry::new([64, 32, 13], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let mut three: Mask = Volume::zeros(g);
         for (z, cx) in [(0usize, 20.0), (6, 23.0), (12, 43.0)] {
@@ -636,15 +569,11 @@ mod tests {
         assert_eq!(jumping_gaps(&input).unwrap(), vec![1]);
         let out = fill(0, input, true).unwrap();
         assert!(at(&out, 3) != at(&three, 0) && at(&out, 3) != at(&three, 6));
-        assert_eq!(
-            out.slice(Axis::Z, 8).unwrap(),
-            three.slice(Axis::Z, 6).unwrap()
-        );
-        assert_eq!(
-            out.slice(Axis::Z, 10).unwrap(),
-            three.slice(Axis::Z, 12).unwrap()
-        );
-        // A field of pieces is never copied for jumping.
+        let faded = fade(&at(&three, 6), &at(&three, 12), 6, &plane);
+        for s in 7..12 {
+            assert_eq!(at(&out, s), faded[s - 7], "slice {s}");
+        }
+        // A field of pieces never fades for jumping.
         let tubes = field(4);
         let mut shifted = tubes.clone();
         let (w, h) = tubes.slice_shape(Axis::Z);

@@ -13,6 +13,7 @@ pub mod confidence;
 pub mod crop;
 pub mod drawn;
 pub mod image;
+pub mod jump;
 pub mod labels;
 pub mod linear;
 pub mod loo;
