@@ -5,8 +5,13 @@
 //! between the first and last drawn ones that were not drawn) and by Dice on
 //! the whole volume (which also counts what spills past the outermost drawn
 //! slices).
-use crate::{InterpError, Interpolator, SparseMask};
-use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
+//!
+//! A label volume (every nucleus of a segmentation its own label) runs the
+//! same way on its foreground's slices, every label interpolated on its own
+//! ([`crate::interpolate_labels`]), and is scored by the label-matched Dice
+//! ([`label_dice_on`]).
+use crate::{InterpError, Interpolator, SparseMask, interpolate_labels};
+use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
 
 /// The drawn slices of `mask` for `k` skipped slices; `None` when the mask
 /// shows on fewer than two slices.
@@ -47,6 +52,29 @@ pub fn dice_on(a: &Mask, b: &Mask, axis: Axis, slices: &[usize]) -> f64 {
         for (p, q) in x.iter().zip(y.iter()) {
             inter += u64::from(p && q);
             sum += u64::from(p) + u64::from(q);
+        }
+    }
+    if sum == 0 {
+        1.0
+    } else {
+        2.0 * inter as f64 / sum as f64
+    }
+}
+
+/// Label-matched Dice of the label volume `a` against `b` over the slices
+/// `slices`: `2 Σ_l |A_l ∩ B_l| / (|A > 0| + |B > 0|)`, so a voxel counts as
+/// agreeing only where both hold the same label (a nucleus painted with its
+/// neighbour's label is wrong twice). 1 when both are empty there.
+pub fn label_dice_on(a: &LabelVolume, b: &LabelVolume, axis: Axis, slices: &[usize]) -> f64 {
+    let (mut inter, mut sum) = (0u64, 0u64);
+    for &s in slices {
+        let (x, y) = (
+            a.view(axis, s).expect("in range"),
+            b.view(axis, s).expect("in range"),
+        );
+        for (p, q) in x.iter().zip(y.iter()) {
+            inter += u64::from(p != 0 && p == q);
+            sum += u64::from(p != 0) + u64::from(q != 0);
         }
     }
     if sum == 0 {
@@ -101,6 +129,30 @@ pub fn score(
     }))
 }
 
+/// [`score`] on a label volume: the drawn slices those of its foreground,
+/// every label interpolated on its own, scored by [`label_dice_on`]; `None`
+/// when the foreground shows on fewer than two slices.
+pub fn score_labels(
+    method: &dyn Interpolator,
+    truth: &LabelVolume,
+    axis: Axis,
+    k: usize,
+) -> Result<Option<Score>, InterpError> {
+    let Some(drawn) = drawn_for_skip(&truth.map(|l| l > 0), axis, k) else {
+        return Ok(None);
+    };
+    let sparse = sparse_of(truth, axis, &drawn);
+    let t = std::time::Instant::now();
+    let out = interpolate_labels(method, &sparse, axis, &drawn)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let all: Vec<usize> = (0..truth.slice_count(axis)).collect();
+    Ok(Some(Score {
+        skipped: label_dice_on(&out, truth, axis, &skipped(&drawn)),
+        whole: label_dice_on(&out, truth, axis, &all),
+        seconds,
+    }))
+}
+
 /// The box of `mask`'s voxels grown by `margin` (clamped to the volume), as
 /// `[lo, hi)` per axis; `None` for an empty mask.
 pub fn bounding_box(mask: &Mask, margin: usize) -> Option<[[usize; 2]; 3]> {
@@ -138,4 +190,62 @@ pub fn crop<T: Voxel>(v: &Volume<T>, bbox: [[usize; 2]; 3]) -> Result<Volume<T>,
         }
     }
     Ok(Volume::from_vec(geometry, data)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nearest::Nearest;
+
+    /// Two labels side by side on every slice of a 12 × 6 × 9 volume.
+    fn two_labels() -> LabelVolume {
+        let g = Geometry::new([12, 6, 9], [1.0; 3], Default::default()).unwrap();
+        let mut v: LabelVolume = Volume::zeros(g);
+        for z in 0..9 {
+            for y in 1..5 {
+                for x in 1..5 {
+                    v.set(x, y, z, 1);
+                    v.set(x + 6, y, z, 2);
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn label_dice_counts_a_voxel_only_where_the_labels_agree() {
+        let truth = two_labels();
+        let all: Vec<usize> = (0..9).collect();
+        assert_eq!(label_dice_on(&truth, &truth, Axis::Z, &all), 1.0);
+        // The two labels swapped: the same foreground, no agreement.
+        let swapped = truth.map(|l| [0, 2, 1][l as usize]);
+        assert_eq!(label_dice_on(&swapped, &truth, Axis::Z, &all), 0.0);
+        // Label 2 missing on slice 4: 16 of 32 voxels there, 16 of 16 found.
+        let mut half = truth.clone();
+        half.set_slice(
+            Axis::Z,
+            4,
+            &truth
+                .map(|l| if l == 2 { 0 } else { l })
+                .slice(Axis::Z, 4)
+                .unwrap(),
+        )
+        .unwrap();
+        assert!((label_dice_on(&half, &truth, Axis::Z, &[4]) - 32.0 / 48.0).abs() < 1e-12);
+        // Both empty there: 1.
+        let empty: LabelVolume = Volume::zeros(truth.geometry().clone());
+        assert_eq!(label_dice_on(&empty, &empty, Axis::Z, &[0]), 1.0);
+    }
+
+    #[test]
+    fn label_volumes_score_on_their_foregrounds_drawn_slices() {
+        // Prisms: every method that copies a drawn slice is exact.
+        let truth = two_labels();
+        let s = score_labels(&Nearest, &truth, Axis::Z, 3).unwrap().unwrap();
+        assert_eq!((s.skipped, s.whole), (1.0, 1.0));
+        // A label volume on one slice only: nothing to score.
+        let mut flat: LabelVolume = Volume::zeros(truth.geometry().clone());
+        flat.set(2, 2, 4, 1);
+        assert!(score_labels(&Nearest, &flat, Axis::Z, 3).unwrap().is_none());
+    }
 }

@@ -7,7 +7,8 @@
 //! the mask's own intensity volume. Masks are cropped to their box grown by a
 //! margin (the interpolation of one mask does not see beyond it). The data
 //! (`scripts/fetch-interp-data.sh` prints DIR): the noisy phantom (generated),
-//! stardist's synthetic 3D nuclei, pyradiomics' CT and MR cases and ITK's T1
+//! stardist's synthetic 3D nuclei (as one mask, and as a label volume scored
+//! by the label-matched Dice), pyradiomics' CT and MR cases and ITK's T1
 //! with its k-means classes; a family whose files are missing is skipped with
 //! a note. `--speed` times the methods on phantom cells of 256×256×60 and
 //! 197×233×189 voxels instead.
@@ -16,7 +17,7 @@ use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, LabelVolume, Mask, Volume};
 use interslice_interp::image::walk::RandomWalk;
 use interslice_interp::image::{ImageGuided, intensity_f32};
-use interslice_interp::protocol::{bounding_box, crop, score};
+use interslice_interp::protocol::{bounding_box, crop, score, score_labels};
 use interslice_interp::{Interpolator, by_name};
 use serde::Serialize;
 use std::io::Write as _;
@@ -52,12 +53,21 @@ pub struct Args {
     pub speed: bool,
 }
 
-/// One mask of the benchmark.
+/// One mask or label volume of the benchmark.
 struct Case {
     family: &'static str,
     name: String,
-    mask: Mask,
+    truth: Truth,
     image: Option<Arc<Volume<f32>>>,
+}
+
+/// What a case is traced from.
+enum Truth {
+    /// One structure.
+    Mask(Mask),
+    /// A segmentation with a label per object (every label interpolated on
+    /// its own, scored by the label-matched Dice).
+    Labels(LabelVolume),
 }
 
 /// One measured (mask, method, k).
@@ -93,9 +103,11 @@ pub fn run(a: Args) -> Result<()> {
                 continue;
             };
             for &k in &a.skips {
-                let Some(s) = score(method.as_ref(), &c.mask, Axis::Z, k)
-                    .with_context(|| format!("{} on {}", name, c.name))?
-                else {
+                let scored = match &c.truth {
+                    Truth::Mask(m) => score(method.as_ref(), m, Axis::Z, k),
+                    Truth::Labels(l) => score_labels(method.as_ref(), l, Axis::Z, k),
+                };
+                let Some(s) = scored.with_context(|| format!("{} on {}", name, c.name))? else {
                     continue;
                 };
                 rows.push(Row {
@@ -136,7 +148,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             cases.push(cropped(
                 "noisy phantom",
                 format!("phantom{seed}-{name}"),
-                &mask,
+                Truth::Mask(mask),
                 Some(&image),
             )?);
         }
@@ -149,7 +161,13 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
         cases.push(cropped(
             "stardist nuclei",
             "stardist-all".into(),
-            &labels.map(|l| l > 0),
+            Truth::Mask(labels.map(|l| l > 0)),
+            Some(&image),
+        )?);
+        cases.push(cropped(
+            "stardist nuclei, labelled",
+            "stardist-labels".into(),
+            Truth::Labels(labels),
             Some(&image),
         )?);
     } else {
@@ -179,7 +197,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
         cases.push(cropped(
             family,
             name.into(),
-            &labels.map(|l| l > 0),
+            Truth::Mask(labels.map(|l| l > 0)),
             Some(&Arc::new(img)),
         )?);
     }
@@ -191,7 +209,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             cases.push(cropped(
                 "T1 k-means classes",
                 format!("T1-class{l}"),
-                &labels.mask_of(l),
+                Truth::Mask(labels.mask_of(l)),
                 Some(&img),
             )?);
         }
@@ -232,18 +250,25 @@ fn method_on(
     })
 }
 
-/// A case cropped to its mask's box grown by [`MARGIN`].
+/// A case cropped to its foreground's box grown by [`MARGIN`].
 fn cropped(
     family: &'static str,
     name: String,
-    mask: &Mask,
+    truth: Truth,
     image: Option<&Arc<Volume<f32>>>,
 ) -> Result<Case> {
-    let bbox = bounding_box(mask, MARGIN).with_context(|| format!("{name}: empty mask"))?;
+    let foreground = match &truth {
+        Truth::Mask(m) => bounding_box(m, MARGIN),
+        Truth::Labels(l) => bounding_box(&l.map(|v| v > 0), MARGIN),
+    };
+    let bbox = foreground.with_context(|| format!("{name}: empty mask"))?;
     Ok(Case {
         family,
         name,
-        mask: crop(mask, bbox)?,
+        truth: match truth {
+            Truth::Mask(m) => Truth::Mask(crop(&m, bbox)?),
+            Truth::Labels(l) => Truth::Labels(crop(&l, bbox)?),
+        },
         image: match image {
             Some(i) => Some(Arc::new(crop(i, bbox)?)),
             None => None,
