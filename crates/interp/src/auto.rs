@@ -87,7 +87,11 @@ impl ShapeAuto {
     /// shows the label to as many after the last are held out in turn:
     /// slices farther out are empty in every prediction and add nothing to
     /// the pooled Dice, and leaving them out makes the choice the same on
-    /// the label's box ([`crate::crop`]) as on the whole volume.
+    /// the label's box ([`crate::crop`]) as on the whole volume. A drawn
+    /// slice whose two neighbours do not show the structure is not scored:
+    /// every candidate predicts it empty (on stardist's nuclei as a label
+    /// volume at k = 9, where most nuclei show on one drawn slice, its
+    /// zeros had drowned the slices next to it: 0.6310 → 0.6518).
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
         self.choose_on(input, Compact::held_out)
     }
@@ -126,6 +130,13 @@ impl ShapeAuto {
                 })
             })
             .collect();
+        // A drawn slice whose two neighbours lack the structure (an object
+        // seen on that slice alone) is predicted empty by every candidate
+        // and by the image's walk: it tells nothing of which is better.
+        let shows: Vec<bool> = (0..compact.real.len())
+            .map(|p| compact.truth(p).iter().any(|&x| x))
+            .collect();
+        let telling = |h: &HeldOut| shows[h.pos - 1] || shows[h.pos + 1];
         let mut scores = Vec::new();
         let mut preds = Vec::new();
         for run in runs {
@@ -135,7 +146,8 @@ impl ShapeAuto {
                 preds.push(Vec::new());
                 continue;
             };
-            let held = held?;
+            let mut held = held?;
+            held.retain(telling);
             if held.is_empty() {
                 // Two drawn slices: nothing to hold out (see `two_slices`),
                 // and `fill` fades the outlines in place if they jump.
@@ -511,6 +523,36 @@ mod tests {
         // The same field drawn closer, or 9 pieces as far apart: held out.
         assert!(aligned_score(&field(4), WIDE_GAP - 1).is_finite());
         assert!(aligned_score(&field(3), WIDE_GAP).is_finite());
+    }
+
+    #[test]
+    fn a_slice_between_two_without_the_structure_is_not_scored() {
+        // A disc on slice 5 alone, drawn with the empty slices 0 and 10:
+        // nothing to score, so the choice is the one for two slices.
+        let g = Geometry::new([32, 32, 11], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let mut m: Mask = Volume::zeros(g);
+        for y in 0..32usize {
+            for x in 0..32usize {
+                let (dx, dy) = (x as f64 - 15.5, y as f64 - 15.5);
+                if dx * dx + dy * dy <= 36.0 {
+                    m.set(x, y, 5, true);
+                }
+            }
+        }
+        let drawn = [0usize, 5, 10];
+        let choice = ShapeAuto::default()
+            .choose(&SparseMask::new(&m, Axis::Z, &drawn))
+            .unwrap();
+        assert!(choice.scores.is_empty() && choice.held.is_empty());
+        // With a second showing slice beside it, slice 5 is scored.
+        let disc = m.slice(Axis::Z, 5).unwrap();
+        m.set_slice(Axis::Z, 8, &disc).unwrap();
+        let drawn = [0usize, 5, 8, 10];
+        let choice = ShapeAuto::default()
+            .choose(&SparseMask::new(&m, Axis::Z, &drawn))
+            .unwrap();
+        assert_eq!(choice.scores.len(), candidates().len());
+        assert!(choice.held.iter().any(|h| h.pos == 1));
     }
 
     #[test]
