@@ -43,22 +43,7 @@ pub fn sparse_of<T: Voxel>(mask: &Volume<T>, axis: Axis, drawn: &[usize]) -> Vol
 
 /// Dice of `a` against `b` over the slices `slices` only (1 when both are empty there).
 pub fn dice_on(a: &Mask, b: &Mask, axis: Axis, slices: &[usize]) -> f64 {
-    let (mut inter, mut sum) = (0u64, 0u64);
-    for &s in slices {
-        let (x, y) = (
-            a.view(axis, s).expect("in range"),
-            b.view(axis, s).expect("in range"),
-        );
-        for (p, q) in x.iter().zip(y.iter()) {
-            inter += u64::from(p && q);
-            sum += u64::from(p) + u64::from(q);
-        }
-    }
-    if sum == 0 {
-        1.0
-    } else {
-        2.0 * inter as f64 / sum as f64
-    }
+    dice_where(a, b, axis, slices, |x| x)
 }
 
 /// Label-matched Dice of the label volume `a` against `b` over the slices
@@ -66,6 +51,18 @@ pub fn dice_on(a: &Mask, b: &Mask, axis: Axis, slices: &[usize]) -> f64 {
 /// agreeing only where both hold the same label (a nucleus painted with its
 /// neighbour's label is wrong twice). 1 when both are empty there.
 pub fn label_dice_on(a: &LabelVolume, b: &LabelVolume, axis: Axis, slices: &[usize]) -> f64 {
+    dice_where(a, b, axis, slices, |l| l != 0)
+}
+
+/// Dice over `slices` of the voxels where `inside`, a voxel of both
+/// agreeing where it holds the same value.
+fn dice_where<T: Voxel + PartialEq>(
+    a: &Volume<T>,
+    b: &Volume<T>,
+    axis: Axis,
+    slices: &[usize],
+    inside: impl Fn(T) -> bool,
+) -> f64 {
     let (mut inter, mut sum) = (0u64, 0u64);
     for &s in slices {
         let (x, y) = (
@@ -73,8 +70,8 @@ pub fn label_dice_on(a: &LabelVolume, b: &LabelVolume, axis: Axis, slices: &[usi
             b.view(axis, s).expect("in range"),
         );
         for (p, q) in x.iter().zip(y.iter()) {
-            inter += u64::from(p != 0 && p == q);
-            sum += u64::from(p != 0) + u64::from(q != 0);
+            inter += u64::from(inside(p) && p == q);
+            sum += u64::from(inside(p)) + u64::from(inside(q));
         }
     }
     if sum == 0 {
