@@ -4,6 +4,7 @@
 //! One binary, not one per file: each test binary links every dependency
 //! and monomorphises its generic code again; the four crates' 43 binaries
 //! took 346–398 crate-seconds of a cold build, these four 295.
+mod bench_cli;
 mod common;
 mod contours_cli;
 mod evaluate_cli;

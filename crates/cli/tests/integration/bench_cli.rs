@@ -1,0 +1,87 @@
+//! `interslice bench` through the binary on a small stand-in for the
+//! development data: the generated phantom and a folder `stardist/` holding
+//! two labelled balls and their image, run as one mask and as a label volume.
+use crate::common::bin;
+use interslice_core::{Geometry, LabelVolume, LengthUnit, Volume};
+
+/// Two balls of radius 5 (labels 1 and 2) in a 40 × 24 × 20 volume, and an
+/// image bright inside them.
+fn two_balls() -> (LabelVolume, LabelVolume) {
+    let g = Geometry::new([40, 24, 20], [1.0; 3], LengthUnit::Micrometre).unwrap();
+    let mut labels: LabelVolume = Volume::zeros(g.clone());
+    let mut image: LabelVolume = Volume::filled(g, 50);
+    for (label, cx) in [(1u16, 10.0), (2, 28.0)] {
+        for z in 0..20usize {
+            for y in 0..24usize {
+                for x in 0..40usize {
+                    let d = [x as f64 - cx, y as f64 - 11.5, z as f64 - 9.5];
+                    if d.iter().map(|v| v * v).sum::<f64>() <= 30.0 {
+                        labels.set(x, y, z, label);
+                        image.set(x, y, z, 200);
+                    }
+                }
+            }
+        }
+    }
+    (labels, image)
+}
+
+#[test]
+fn bench_scores_the_masks_and_the_label_volume_it_finds() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("stardist")).unwrap();
+    let (labels, image) = two_balls();
+    interslice_io::write_labels(&dir.path().join("stardist/mask3d.tif"), &labels).unwrap();
+    interslice_io::write_labels(&dir.path().join("stardist/img3d.tif"), &image).unwrap();
+    let json = dir.path().join("rows.json");
+    let out = bin()
+        .args([
+            "bench",
+            "--skips",
+            "2",
+            "--methods",
+            "nearest,shape-auto",
+            "--json",
+        ])
+        .arg(&json)
+        .arg("--data")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("| stardist nuclei, labelled (1) | shape-auto |"),
+        "{stdout}"
+    );
+    // The families without data are named, not fatal.
+    assert!(String::from_utf8_lossy(&out.stderr).contains("pyradiomics"));
+    let rows: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let dice = |mask: &str, method: &str| {
+        rows.iter()
+            .find(|r| r["mask"] == mask && r["method"] == method)
+            .unwrap_or_else(|| panic!("no row {mask} {method}"))["dice_skipped"]
+            .as_f64()
+            .unwrap()
+    };
+    // Four phantom masks, the balls as one mask and as labels, two methods.
+    assert_eq!(rows.len(), 6 * 2);
+    for mask in ["stardist-all", "stardist-labels"] {
+        // Balls drawn every third slice: every method is close, and the
+        // shape methods are closer than the copy.
+        assert!(dice(mask, "nearest") > 0.85, "{mask}");
+        assert!(dice(mask, "shape-auto") > dice(mask, "nearest"), "{mask}");
+        assert!(dice(mask, "shape-auto") > 0.9, "{mask}");
+    }
+    // Apart and labelled alike, the two scores agree.
+    let (all, each) = (
+        dice("stardist-all", "shape-auto"),
+        dice("stardist-labels", "shape-auto"),
+    );
+    assert!((all - each).abs() < 0.02, "{all} {each}");
+}
