@@ -316,11 +316,13 @@ pub fn fill(index: usize, input: SparseMask<'_>, fade_jumps: bool) -> Result<Mas
         return Ok(out);
     }
     let plane = Plane::of(&input);
+    let map = |d: usize| -> Result<_, InterpError> {
+        let slice = input.mask.slice(input.axis, d)?;
+        Ok(SdfCache::signed_distance(input.maps, &slice, &plane))
+    };
     for i in jumping_gaps(&input)? {
         let (a, b) = (input.drawn[i], input.drawn[i + 1]);
-        let from = input.mask.slice(input.axis, a)?;
-        let to = input.mask.slice(input.axis, b)?;
-        for (s, slice) in (a + 1..b).zip(fade(&from, &to, b - a, &plane)) {
+        for (s, slice) in (a + 1..b).zip(fade(&map(a)?, &map(b)?, b - a)) {
             out.set_slice(input.axis, s, &slice)?;
         }
     }
@@ -584,7 +586,8 @@ mod tests {
         let (jumps, out) = run(&far, &drawn);
         assert_eq!(jumps, vec![0]);
         let plane = Plane::of(&SparseMask::new(&far, Axis::Z, &drawn));
-        let faded = fade(&at(&far, 0), &at(&far, 6), 6, &plane);
+        let sdf = |m: &Mask, z: usize| crate::sdf::signed_distance(&at(m, z), &plane);
+        let faded = fade(&sdf(&far, 0), &sdf(&far, 6), 6);
         for s in 1..6 {
             assert_eq!(at(&out, s), faded[s - 1], "slice {s}");
         }
@@ -611,7 +614,7 @@ mod tests {
         assert_eq!(jumping_gaps(&input).unwrap(), vec![1]);
         let out = fill(0, input, true).unwrap();
         assert!(at(&out, 3) != at(&three, 0) && at(&out, 3) != at(&three, 6));
-        let faded = fade(&at(&three, 6), &at(&three, 12), 6, &plane);
+        let faded = fade(&sdf(&three, 6), &sdf(&three, 12), 6);
         for s in 7..12 {
             assert_eq!(at(&out, s), faded[s - 7], "slice {s}");
         }

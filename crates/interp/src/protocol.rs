@@ -114,16 +114,10 @@ pub fn score(
     let Some(drawn) = drawn_for_skip(truth, axis, k) else {
         return Ok(None);
     };
-    let sparse = sparse_of(truth, axis, &drawn);
-    let t = std::time::Instant::now();
-    let out = method.interpolate(SparseMask::new(&sparse, axis, &drawn))?;
-    let seconds = t.elapsed().as_secs_f64();
-    let all: Vec<usize> = (0..truth.slice_count(axis)).collect();
-    Ok(Some(Score {
-        skipped: dice_on(&out, truth, axis, &skipped(&drawn)),
-        whole: dice_on(&out, truth, axis, &all),
-        seconds,
-    }))
+    scored(truth, axis, &drawn, dice_on, |sparse| {
+        method.interpolate(SparseMask::new(sparse, axis, &drawn))
+    })
+    .map(Some)
 }
 
 /// [`score`] on a label volume: the drawn slices those of its foreground,
@@ -138,16 +132,31 @@ pub fn score_labels(
     let Some(drawn) = drawn_for_skip(&truth.map(|l| l > 0), axis, k) else {
         return Ok(None);
     };
-    let sparse = sparse_of(truth, axis, &drawn);
+    scored(truth, axis, &drawn, label_dice_on, |sparse| {
+        interpolate_labels(method, sparse, axis, &drawn)
+    })
+    .map(Some)
+}
+
+/// `truth` kept on `drawn` only, filled by `run` (timed) and scored by
+/// `dice` on the skipped slices and on the whole volume.
+fn scored<T: Voxel>(
+    truth: &Volume<T>,
+    axis: Axis,
+    drawn: &[usize],
+    dice: fn(&Volume<T>, &Volume<T>, Axis, &[usize]) -> f64,
+    run: impl FnOnce(&Volume<T>) -> Result<Volume<T>, InterpError>,
+) -> Result<Score, InterpError> {
+    let sparse = sparse_of(truth, axis, drawn);
     let t = std::time::Instant::now();
-    let out = interpolate_labels(method, &sparse, axis, &drawn)?;
+    let out = run(&sparse)?;
     let seconds = t.elapsed().as_secs_f64();
     let all: Vec<usize> = (0..truth.slice_count(axis)).collect();
-    Ok(Some(Score {
-        skipped: label_dice_on(&out, truth, axis, &skipped(&drawn)),
-        whole: label_dice_on(&out, truth, axis, &all),
+    Ok(Score {
+        skipped: dice(&out, truth, axis, &skipped(drawn)),
+        whole: dice(&out, truth, axis, &all),
         seconds,
-    }))
+    })
 }
 
 /// The box of `mask`'s voxels grown by `margin` (clamped to the volume), as
