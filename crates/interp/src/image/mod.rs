@@ -146,7 +146,8 @@ pub const BOX_WALK_GATE: f64 = 1.25;
 /// on their 128 × 128 × 62 volume.
 pub const BOX_WALK_MIN_GAP: usize = 4;
 
-/// With two drawn slices nothing can be held out; the whole-box walk
+/// With two drawn slices nothing can be held out (nor where no held-out
+/// slice shows the label, [`BLIND_WALK_GAP`]); the whole-box walk
 /// ([`Walk::Box`]) is used when intensity alone tells the pixels just
 /// inside the tracing from those just outside with this area under the ROC
 /// curve ([`IntensityModel::separation`]): the traced boundary is an edge
@@ -166,6 +167,60 @@ pub const BOX_WALK_MIN_GAP: usize = 4;
 /// 0.847) and on a ball with a clean edge (0.774 against 0.848); breast1
 /// gained 0.014.
 pub const EDGE_SEPARATION: f64 = 0.9;
+
+/// Where nothing held out shows the label and no two consecutive drawn
+/// slices both show it (an object seen on one drawn slice, whose
+/// neighbours both lack it: a small nucleus of a label volume), the
+/// whole-box walk is used, whatever the edge, once some gap beside a drawn
+/// slice that shows the label spans at least this many slices. How far such an object reaches past its one outline is in no
+/// tracing: the shape methods guess it (a copy to half the gap, a cap),
+/// and the wider the gap the worse the guess, while the walk stops where
+/// the image does (and, on an image without an edge, fades towards the
+/// empty drawn slices as the guesses do). On stardist's nuclei as a label
+/// volume (`interslice bench`, label-matched Dice on the skipped slices)
+/// at k = 9 the 49 nuclei seen on one drawn slice went from 0.66 (the
+/// shape) to 0.75, level with the walker anchor, the walk winning at every
+/// edge separation from 0.6 up; at k = 3 (a gap of 4) the 3 such nuclei
+/// lost 0.08 to the walk (0.83 → 0.75) and at k = 5 (a gap of 6) those
+/// below [`EDGE_SEPARATION`] were even (0.80 against 0.80).
+pub const BLIND_WALK_GAP: usize = 8;
+
+/// The widest gap, in slices, beside a drawn slice of `input` that shows
+/// the structure, where no two consecutive drawn slices both show it (every
+/// gap is one where the structure ends); `None` where some pair does (the
+/// walk then has outlines on both sides, [`EDGE_SEPARATION`]'s case).
+fn widest_end_gap(input: &SparseMask<'_>) -> Result<Option<usize>, InterpError> {
+    let shows = showing(input)?;
+    let pairs = || input.drawn.windows(2).zip(shows.windows(2));
+    if pairs().any(|(_, s)| s[0] && s[1]) {
+        return Ok(None);
+    }
+    Ok(pairs()
+        .filter(|(_, s)| s[0] || s[1])
+        .map(|(d, _)| d[1] - d[0])
+        .max())
+}
+
+/// Whether each drawn slice of `input` shows the structure.
+fn showing(input: &SparseMask<'_>) -> Result<Vec<bool>, InterpError> {
+    input
+        .drawn
+        .iter()
+        .map(|&d| Ok(input.mask.slice(input.axis, d)?.iter().any(|&x| x)))
+        .collect()
+}
+
+/// Whether skipped slice `s` lies between two drawn slices that both show
+/// the structure (inside the traced span, where a walk that covers less
+/// than the shape is diluted, `walk::undiluted`), rather than between one
+/// that shows it and one that does not, where the structure ends and a
+/// walk that shrinks follows it ending.
+fn spanned<'a>(
+    input: &'a SparseMask<'a>,
+) -> Result<impl Fn(usize) -> bool + Sync + 'a, InterpError> {
+    let shows = showing(input)?;
+    Ok(move |s| crate::slices::bracket(input.drawn, s).is_some_and(|g| shows[g] && shows[g + 1]))
+}
 
 /// The largest box, in voxels, the walk of [`Plan::walk`] is tried on: its
 /// memory ([`walk::BYTES_PER_VOXEL`] a voxel, 400 MB here) bounds what one
@@ -363,9 +418,16 @@ impl ImageGuided {
             model,
         };
         let (compact, held) = (&choice.compact, &choice.held);
-        if held.is_empty() {
+        if held
+            .iter()
+            .all(|h| !compact.truth(h.pos).iter().any(|&x| x))
+        {
+            // Nothing held out that shows the label: no evidence either way
+            // (see `EDGE_SEPARATION` and `BLIND_WALK_GAP`).
             let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
-            if !self.on_stack && sep >= EDGE_SEPARATION && !pole_fill(prior, input)? {
+            let wide = widest_end_gap(input)?.is_some_and(|g| g >= BLIND_WALK_GAP);
+            let trusted = sep >= EDGE_SEPARATION || wide;
+            if !self.on_stack && trusted && !pole_fill(prior, input)? {
                 plan.walk = Walk::Box;
             }
             return Ok(plan);
@@ -724,6 +786,7 @@ impl ImageGuided {
         let plane = Plane::of(input);
         let seeds = |s: usize| band_seeds(prior, input, s);
         let boxed = plan.walk == Walk::Box;
+        let spans = spanned(input)?;
         let seeded: Option<&walk::Seeds<'_>> = (!boxed).then_some(&seeds);
         let Some(walked) = self.walker().walk_with(input, seeded)? else {
             return Ok(None);
@@ -733,7 +796,8 @@ impl ImageGuided {
             prior,
             (confidence, plan.scale),
             |s, delta, phi| {
-                let z = walk::undiluted(walked.logit(s, &plane)?, phi);
+                let z = walked.logit(s, &plane)?;
+                let z = if spans(s) { walk::undiluted(z, phi) } else { z };
                 let reach = if boxed {
                     f32::INFINITY
                 } else {

@@ -401,6 +401,13 @@ pub const DILUTED: f64 = 0.8;
 /// wherever the walk covers less (a share of 1) gained a little more on
 /// class 2 and lost 0.009 on class 1 (the background) at k = 9; a share of
 /// 0.5 lost 0.022 on brain1 at k ≥ 5.
+///
+/// Only between two drawn slices that both show the structure (the
+/// caller's rule, `image::spanned`): between one that shows it and one that
+/// does not, the structure ends, and a walk that shrinks there follows it
+/// ending. On stardist's nuclei as a label volume at k = 9, the 49 nuclei
+/// seen on one drawn slice scored 0.66 with the walk raised and 0.75 as
+/// walked (label-matched Dice on the skipped slices).
 pub(crate) fn undiluted(mut z: Vec<f32>, phi: &[f32]) -> Vec<f32> {
     let target = phi.iter().filter(|&&p| p < 0.0).count();
     let now = z.iter().filter(|&&v| v > 0.0).count();

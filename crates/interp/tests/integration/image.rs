@@ -369,3 +369,53 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
     eprintln!("upright {drawn:?}: the shape {s:.4}");
     assert!(s > 0.83, "the shape {s:.4}");
 }
+
+/// An object seen on one drawn slice (a small nucleus of a label volume):
+/// no held-out slice shows it, so nothing tells the shape from the image.
+/// Across a wide gap the whole-box walk decides how far it reaches past
+/// its outline, whatever the edge, and is not raised to the shape's area
+/// there (the object ends between a drawn slice that shows it and one that
+/// does not); across a narrow gap an unclear edge keeps the shape.
+#[test]
+fn an_object_on_one_drawn_slice_ends_where_the_image_says_across_a_wide_gap() {
+    // Flat in z: 7 slices high (9..=15), 16 pixels across.
+    let truth = shape([32, 32, 25], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 12.5], [8.0, 8.0, 3.6])
+    });
+    // Noise that hides the edge pixel by pixel (intensity tells the pixels
+    // just inside from those just outside with an AUC below
+    // `EDGE_SEPARATION`), yet the walk, smoothing over many, finds it.
+    let image = image_of(&truth, 260.0);
+    let shaped_and_walked = |drawn: &[usize]| {
+        let sparse = sparse_of(&truth, Axis::Z, drawn);
+        let input = SparseMask::new(&sparse, Axis::Z, drawn);
+        let method = ImageGuided::new(image.clone());
+        let plan = method.plan(&input).unwrap();
+        let skipped: Vec<usize> = (drawn[0] + 1..drawn[drawn.len() - 1])
+            .filter(|s| !drawn.contains(s))
+            .collect();
+        let guided = method.interpolate(input).unwrap();
+        let shaped = ShapeAuto::default().interpolate(input).unwrap();
+        for &d in drawn {
+            assert_eq!(
+                guided.slice(Axis::Z, d).unwrap(),
+                sparse.slice(Axis::Z, d).unwrap()
+            );
+        }
+        let g = dice_on(&guided, &truth, Axis::Z, &skipped);
+        let s = dice_on(&shaped, &truth, Axis::Z, &skipped);
+        eprintln!(
+            "drawn {drawn:?}: walk {:?}, image-guided {g:.4}, shape {s:.4}",
+            plan.walk
+        );
+        (plan.walk, g, s, guided == shaped)
+    };
+    // Drawn every 10th slice: the walk, and it finds the ends.
+    let (walk, g, s, _) = shaped_and_walked(&[2, 12, 22]);
+    assert_eq!(walk, Walk::Box);
+    assert!(g > s + 0.05, "image-guided {g:.4} against the shape {s:.4}");
+    // Every 4th: the shape, bit for bit.
+    let (walk, _, _, same) = shaped_and_walked(&[8, 12, 16]);
+    assert_eq!(walk, Walk::Off);
+    assert!(same);
+}
