@@ -47,7 +47,7 @@ pub mod fuse;
 pub mod model;
 pub mod walk;
 
-use crate::auto::{Choice, ShapeAuto, drawn_field, fill, pole_fill};
+use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill};
 use crate::confidence::{shape_confidence, sigmoid};
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
@@ -183,23 +183,10 @@ pub const EDGE_SEPARATION: f64 = 0.9;
 /// edge separation from 0.6 up; at k = 3 (a gap of 4) the 3 such nuclei
 /// lost 0.08 to the walk (0.83 → 0.75) and at k = 5 (a gap of 6) those
 /// below [`EDGE_SEPARATION`] were even (0.80 against 0.80).
-pub const BLIND_WALK_GAP: usize = 8;
-
-/// The widest gap, in slices, beside a drawn slice of `input` that shows
-/// the structure, where no two consecutive drawn slices both show it (every
-/// gap is one where the structure ends); `None` where some pair does (the
-/// walk then has outlines on both sides, [`EDGE_SEPARATION`]'s case).
-fn widest_end_gap(input: &SparseMask<'_>) -> Result<Option<usize>, InterpError> {
-    let shows = showing(input)?;
-    let pairs = || input.drawn.windows(2).zip(shows.windows(2));
-    if pairs().any(|(_, s)| s[0] && s[1]) {
-        return Ok(None);
-    }
-    Ok(pairs()
-        .filter(|(_, s)| s[0] || s[1])
-        .map(|(d, _)| d[1] - d[0])
-        .max())
-}
+///
+/// The same gap as `shape-auto`'s copy of such objects
+/// ([`crate::auto::ALONE_COPY_GAP`]).
+pub const BLIND_WALK_GAP: usize = crate::auto::ALONE_COPY_GAP;
 
 /// Whether each drawn slice of `input` shows the structure.
 fn showing(input: &SparseMask<'_>) -> Result<Vec<bool>, InterpError> {
@@ -425,7 +412,7 @@ impl ImageGuided {
             // Nothing held out that shows the label: no evidence either way
             // (see `EDGE_SEPARATION` and `BLIND_WALK_GAP`).
             let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
-            let wide = widest_end_gap(input)?.is_some_and(|g| g >= BLIND_WALK_GAP);
+            let wide = alone_across(input.drawn, &showing(input)?, BLIND_WALK_GAP);
             let trusted = sep >= EDGE_SEPARATION || wide;
             if !self.on_stack && trusted && !pole_fill(prior, input)? {
                 plan.walk = Walk::Box;
