@@ -572,20 +572,26 @@ mod tests {
         assert!(aligned_score(&field(3), WIDE_GAP).is_finite());
     }
 
-    #[test]
-    fn a_slice_between_two_without_the_structure_is_not_scored() {
-        // A disc on slice 5 alone, drawn with the empty slices 0 and 10:
-        // nothing to score, so the choice is the one for two slices.
-        let g = Geometry::new([32, 32, 11], [1.0; 3], LengthUnit::Micrometre).unwrap();
+    /// A 32 × 32 × `slices` mask holding a disc of radius 6 on slice `z`.
+    fn disc_on(slices: usize, z: usize) -> Mask {
+        let g = Geometry::new([32, 32, slices], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let mut m: Mask = Volume::zeros(g);
         for y in 0..32usize {
             for x in 0..32usize {
                 let (dx, dy) = (x as f64 - 15.5, y as f64 - 15.5);
                 if dx * dx + dy * dy <= 36.0 {
-                    m.set(x, y, 5, true);
+                    m.set(x, y, z, true);
                 }
             }
         }
+        m
+    }
+
+    #[test]
+    fn a_slice_between_two_without_the_structure_is_not_scored() {
+        // A disc on slice 5 alone, drawn with the empty slices 0 and 10:
+        // nothing to score, so the choice is the one for two slices.
+        let mut m = disc_on(11, 5);
         let drawn = [0usize, 5, 10];
         let choice = ShapeAuto::default()
             .choose(&SparseMask::new(&m, Axis::Z, &drawn))
@@ -606,16 +612,7 @@ mod tests {
     fn an_object_alone_on_its_drawn_slice_is_copied_across_wide_gaps_only() {
         // A disc on slice 10 alone, between the empty drawn slices 10 - g
         // and 10 + g.
-        let g = Geometry::new([32, 32, 21], [1.0; 3], LengthUnit::Micrometre).unwrap();
-        let mut m: Mask = Volume::zeros(g);
-        for y in 0..32usize {
-            for x in 0..32usize {
-                let (dx, dy) = (x as f64 - 15.5, y as f64 - 15.5);
-                if dx * dx + dy * dy <= 36.0 {
-                    m.set(x, y, 10, true);
-                }
-            }
-        }
+        let mut m = disc_on(21, 10);
         let chosen = |gap: usize| {
             let drawn = [10 - gap, 10, 10 + gap];
             let index = ShapeAuto::default()
