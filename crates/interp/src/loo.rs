@@ -73,7 +73,7 @@ impl Compact {
     }
 
     /// Pooled Dice of held-out predictions against the slices they predict.
-    pub fn pooled_dice(&self, held: &[HeldOut]) -> f64 {
+    pub fn pooled_dice<'a>(&self, held: impl IntoIterator<Item = &'a HeldOut>) -> f64 {
         let mut acc = (0u64, 0u64);
         for h in held {
             let (a, b) = overlap(&h.predicted, &self.truth(h.pos));

@@ -13,10 +13,10 @@
 //! ([`crate::area_profile`]): the blend says where, the profile how much (the
 //! way `image-guided` raises a diluted walk to its prior's area). Where no
 //! third drawn slice shows the structure the profile is not known: between
-//! the only two drawn slices that show it, the structure is taken to end
-//! half a slice beyond them and to bulge between as a round one does
-//! (`pole_area`), where their areas are small enough to be its polar caps
-//! (`polar_caps`); where more drawn slices show it, but none next to the
+//! two drawn slices that show it with nothing else drawn, the structure is
+//! taken to end half a slice beyond them and to bulge between as a round
+//! one does (`pole_area`), where their areas are small enough to be its
+//! polar caps (`polar_caps`); where more drawn slices show it, but none next to the
 //! gap does, the plain blend is kept. In an end gap (no drawn slice beyond
 //! one of its ends shows the structure) the parabola rests on one side
 //! only and the area is kept between the gap's two drawn areas: on lung2 of
@@ -160,15 +160,25 @@ pub fn pole_profile_applies(input: &SparseMask<'_>) -> Result<bool, InterpError>
     ))
 }
 
-/// Whether exactly two drawn slices show the structure, next to each other
-/// among the drawn slices, with areas that can be its polar caps
-/// (`polar_caps`): the gap between them takes the pole profile.
+/// Whether exactly two drawn slices show the structure and no other slice
+/// is drawn, with areas that can be its polar caps (`polar_caps`): the gap
+/// between them takes the pole profile.
+///
+/// A drawn slice without the structure beyond one of them (a label of a
+/// label volume, whose other labels' drawn slices lack it) says the
+/// structure ends somewhere before that slice, not that the two drawn
+/// slices are its first and last, which the profile assumes. A flattened
+/// ellipsoid's nucleus seen on slices 9 and 13 of its 8–15, with 5 and 17
+/// drawn without it, took the profile's bulge (2.5 times its drawn area in
+/// mid-gap) and a Dice of 0.74; the blend cut to the parabola through the
+/// empty slice keeps 0.89. On stardist's nuclei as a label volume
+/// (`shape-auto`, k = 1–9) only k = 5 and 7 moved, 0.7176 / 0.5578 →
+/// 0.7171 / 0.5495; no other mask of the benchmark has a drawn slice
+/// beyond its two.
 fn pole_pair(drawn: &[usize], areas: &[f64], plane: &Plane) -> bool {
-    let showing: Vec<usize> = (0..drawn.len()).filter(|&i| areas[i] > 0.0).collect();
-    let [i, j] = showing[..] else {
-        return false;
-    };
-    j == i + 1 && polar_caps(areas[i].max(areas[j]), drawn[j] - drawn[i], plane)
+    drawn.len() == 2
+        && areas.iter().all(|&a| a > 0.0)
+        && polar_caps(areas[0].max(areas[1]), drawn[1] - drawn[0], plane)
 }
 
 /// The pixels inside the structure on each drawn slice of `input`.

@@ -419,3 +419,31 @@ fn an_object_on_one_drawn_slice_ends_where_the_image_says_across_a_wide_gap() {
     assert_eq!(walk, Walk::Off);
     assert!(same);
 }
+
+#[test]
+fn an_object_ending_inside_the_traced_range_seen_on_few_drawn_slices_keeps_its_shape_across_narrow_gaps()
+ {
+    // A ball on slices 7–17, drawn every third slice with the empty slices
+    // 3, 6, 18 and 21: seen on 9, 12 and 15, one of them between two that
+    // show it, so `shape-auto` takes `shape-area` by rule.
+    let truth = shape([32, 32, 25], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 12.0], [7.0, 7.0, 5.6])
+    });
+    // A clean edge the fit would lean on if it trusted the slices held out
+    // beside the ball's ends.
+    let image = image_of(&truth, 5.0);
+    let run = |drawn: &[usize]| {
+        let sparse = sparse_of(&truth, Axis::Z, drawn);
+        let input = SparseMask::new(&sparse, Axis::Z, drawn);
+        let choice = ShapeAuto::default().choose(&input).unwrap();
+        let method = ImageGuided::new(image.clone());
+        let plan = method.plan(&input).unwrap();
+        let guided = method.interpolate(input).unwrap();
+        let shaped = ShapeAuto::default().interpolate(input).unwrap();
+        (choice.thin, plan.params.w, guided == shaped)
+    };
+    let (thin, w, same) = run(&[3, 6, 9, 12, 15, 18, 21]);
+    assert!(thin);
+    assert_eq!(w, 0.0);
+    assert!(same, "the shape, bit for bit");
+}
