@@ -447,3 +447,38 @@ fn an_object_ending_inside_the_traced_range_seen_on_few_drawn_slices_keeps_its_s
     assert_eq!(w, 0.0);
     assert!(same, "the shape, bit for bit");
 }
+
+#[test]
+fn an_object_ending_inside_the_traced_range_seen_on_few_drawn_slices_walks_a_clear_edge_across_wide_gaps()
+ {
+    // A ball on slices 9–21, drawn every fifth slice with the empty slices
+    // 2, 7, 22 and 27: seen on 12 and 17 only, nothing between two that
+    // show it, so `shape-auto` takes `shape-area` by rule.
+    let truth = shape([32, 32, 31], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 15.0], [7.0, 7.0, 6.6])
+    });
+    let drawn = [2usize, 7, 12, 17, 22, 27];
+    let skipped: Vec<usize> = (3..27).filter(|s| !drawn.contains(s)).collect();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    assert!(ShapeAuto::default().choose(&input).unwrap().thin);
+    let shaped = ShapeAuto::default().interpolate(input).unwrap();
+    let s = dice_on(&shaped, &truth, Axis::Z, &skipped);
+    let run = |amp: f32| {
+        let method = ImageGuided::new(image_of(&truth, amp));
+        let walk = method.plan(&input).unwrap().walk;
+        let guided = method.interpolate(input).unwrap();
+        (walk, dice_on(&guided, &truth, Axis::Z, &skipped))
+    };
+    // A clear edge: the walk finds the ball's ends.
+    let (walk, g) = run(5.0);
+    assert_eq!(walk, Walk::Box);
+    assert!(g > s + 0.05, "image-guided {g:.4} against the shape {s:.4}");
+    // Noise: no walk, and nothing lost to the shape.
+    let (walk, g) = run(3000.0);
+    assert_eq!(walk, Walk::Off);
+    assert!(
+        g >= s - 0.005,
+        "image-guided {g:.4} against the shape {s:.4}"
+    );
+}
