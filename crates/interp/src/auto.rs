@@ -34,7 +34,7 @@ use crate::nearest::Nearest;
 use crate::sdf::SdfCache;
 use crate::shape_area::{ShapeArea, pole_profile_applies};
 use crate::shape_based::ShapeBased;
-use crate::slices::Plane;
+use crate::slices::{Plane, median_gap, showing};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::label_2d;
@@ -308,12 +308,7 @@ pub const WIDE_GAP: usize = 3;
 /// pieces per slice, where plain blending, copying or ITK's morphological
 /// interpolation win.
 pub fn pieces_apart(compact: &Compact) -> bool {
-    let mut gaps: Vec<usize> = compact.real.windows(2).map(|w| w[1] - w[0]).collect();
-    if gaps.is_empty() {
-        return false;
-    }
-    gaps.sort_unstable();
-    gaps[gaps.len() / 2] >= WIDE_GAP && drawn_field(compact)
+    median_gap(&compact.real).is_some_and(|g| g >= WIDE_GAP) && drawn_field(compact)
 }
 
 /// Whether the drawn slices of a compact stack are a field of pieces
@@ -539,10 +534,7 @@ fn preferred(scores: &[f64]) -> usize {
 /// first and last that show the label (all of them when none does).
 fn near_label(input: &SparseMask<'_>) -> Result<Vec<usize>, InterpError> {
     let d = input.drawn;
-    let mut shown = Vec::with_capacity(d.len());
-    for &s in d {
-        shown.push(input.mask.slice(input.axis, s)?.iter().any(|&x| x));
-    }
+    let shown = showing(input)?;
     let (Some(first), Some(last)) = (
         shown.iter().position(|&x| x),
         shown.iter().rposition(|&x| x),

@@ -25,6 +25,7 @@
 //! [`InterpError::OutsideBox`], and the runner tries a larger box, then the
 //! whole volume. A result that reaches the box's in-plane sides (where the
 //! volume goes on) is computed again as well. Tests compare both ways.
+use crate::slices::centroid;
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
@@ -109,20 +110,7 @@ pub fn drift(extents: &[Option<[usize; 4]>]) -> usize {
 pub fn centroid_drift(slices: &[DrawnSlice<'_>], w: usize) -> usize {
     let centroids: Vec<[f64; 2]> = slices
         .iter()
-        .filter_map(|s| {
-            let [u0, u1, v0, v1] = s.extent?;
-            let (mut n, mut su, mut sv) = (0usize, 0usize, 0usize);
-            for v in v0..=v1 {
-                for (u, &x) in s.inside[v * w + u0..=v * w + u1].iter().enumerate() {
-                    if x {
-                        n += 1;
-                        su += u0 + u;
-                        sv += v;
-                    }
-                }
-            }
-            Some([su as f64 / n as f64, sv as f64 / n as f64])
-        })
+        .filter_map(|s| centroid(s.inside, w, s.extent?))
         .collect();
     centroids
         .windows(2)

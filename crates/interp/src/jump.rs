@@ -14,6 +14,7 @@
 //! the nearer slice on the development data's jumping outline (brain1 of
 //! `interslice bench`, below).
 use crate::auto::field_of_pieces;
+use crate::slices::centroid;
 use crate::{InterpError, SparseMask};
 
 /// Two consecutive drawn outlines that share less than this share of the
@@ -96,8 +97,7 @@ fn apart_gaps(input: &SparseMask<'_>) -> Result<Vec<(usize, bool)>, InterpError>
     if field_of_pieces(&slices, width, height) {
         return Ok(Vec::new());
     }
-    let steps = drift_steps(&slices, input.drawn, width);
-    Ok(slices
+    let apart: Vec<usize> = slices
         .windows(2)
         .enumerate()
         .filter(|(_, pair)| {
@@ -106,7 +106,16 @@ fn apart_gaps(input: &SparseMask<'_>) -> Result<Vec<(usize, bool)>, InterpError>
                 && (shared as f64) < APART * smaller as f64
                 && smaller as f64 >= ALIKE * larger as f64
         })
-        .map(|(i, _)| (i, steady_drift(&steps, i)))
+        .map(|(i, _)| i)
+        .collect();
+    if apart.is_empty() {
+        // The usual case on every label the default fills: no centroids.
+        return Ok(Vec::new());
+    }
+    let steps = drift_steps(&slices, input.drawn, width, height);
+    Ok(apart
+        .into_iter()
+        .map(|i| (i, steady_drift(&steps, i)))
         .collect())
 }
 
@@ -130,17 +139,14 @@ pub const DRIFT_TOLERANCE: f64 = 0.5;
 
 /// Per gap between consecutive drawn `slices` (at `drawn`), the step of
 /// the outline's centroid per slice (pixels, in-plane), where both show it.
-fn drift_steps(slices: &[Vec<bool>], drawn: &[usize], width: usize) -> Vec<Option<[f64; 2]>> {
-    let centroid = |s: &[bool]| {
-        let (mut n, mut x, mut y) = (0usize, 0.0, 0.0);
-        for (i, _) in s.iter().enumerate().filter(|(_, v)| **v) {
-            n += 1;
-            x += (i % width) as f64;
-            y += (i / width) as f64;
-        }
-        (n > 0).then(|| [x / n as f64, y / n as f64])
-    };
-    let c: Vec<Option<[f64; 2]>> = slices.iter().map(|s| centroid(s)).collect();
+fn drift_steps(
+    slices: &[Vec<bool>],
+    drawn: &[usize],
+    width: usize,
+    height: usize,
+) -> Vec<Option<[f64; 2]>> {
+    let whole = [0, width - 1, 0, height - 1];
+    let c: Vec<Option<[f64; 2]>> = slices.iter().map(|s| centroid(s, width, whole)).collect();
     (0..slices.len().saturating_sub(1))
         .map(|i| {
             let (a, b) = (c[i]?, c[i + 1]?);

@@ -143,6 +143,40 @@ pub fn bracket(drawn: &[usize], s: usize) -> Option<usize> {
     Some(p - 1)
 }
 
+/// The median of the gaps between consecutive `drawn` slices (the upper
+/// one of an even count); `None` for fewer than two.
+pub fn median_gap(drawn: &[usize]) -> Option<usize> {
+    let mut gaps: Vec<usize> = drawn.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_unstable();
+    gaps.get(gaps.len() / 2).copied()
+}
+
+/// Whether each drawn slice of `input` shows the structure.
+pub fn showing(input: &SparseMask<'_>) -> Result<Vec<bool>, InterpError> {
+    input
+        .drawn
+        .iter()
+        .map(|&d| Ok(input.mask.slice(input.axis, d)?.iter().any(|&x| x)))
+        .collect()
+}
+
+/// The centroid `[u, v]` of the pixels inside a row-major slice `width`
+/// pixels wide, read within its extent `[u0, u1, v0, v1]` (inclusive);
+/// `None` where nothing there is inside.
+pub fn centroid(inside: &[bool], width: usize, [u0, u1, v0, v1]: [usize; 4]) -> Option<[f64; 2]> {
+    let (mut n, mut su, mut sv) = (0usize, 0usize, 0usize);
+    for v in v0..=v1 {
+        for (u, &x) in inside[v * width + u0..=v * width + u1].iter().enumerate() {
+            if x {
+                n += 1;
+                su += u0 + u;
+                sv += v;
+            }
+        }
+    }
+    (n > 0).then(|| [su as f64 / n as f64, sv as f64 / n as f64])
+}
+
 /// Slices from skipped slice `s` to the nearest drawn slice (`δ`, what
 /// the confidence and the image fusion scale with), or `None` where
 /// [`bracket`] is.

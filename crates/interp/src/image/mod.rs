@@ -51,7 +51,7 @@ use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill}
 use crate::confidence::{shape_confidence, sigmoid};
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
-use crate::slices::{Plane, assemble, to_nearest_drawn};
+use crate::slices::{Plane, assemble, median_gap, showing, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
 use fuse::{Params, band, fuse, separate};
 use interslice_core::{AnyVolume, Axis, Mask, Volume};
@@ -216,23 +216,6 @@ pub const BLIND_WALK_GAP: usize = crate::auto::ALONE_COPY_GAP;
 /// the noise is independent from voxel to voxel, unlike a microscope's
 /// blur).
 pub const THIN_SHAPE_GAP: usize = 3;
-
-/// The median of the gaps between consecutive `drawn` slices (0 for fewer
-/// than two).
-fn median_gap(drawn: &[usize]) -> usize {
-    let mut gaps: Vec<usize> = drawn.windows(2).map(|w| w[1] - w[0]).collect();
-    gaps.sort_unstable();
-    gaps.get(gaps.len() / 2).copied().unwrap_or(0)
-}
-
-/// Whether each drawn slice of `input` shows the structure.
-fn showing(input: &SparseMask<'_>) -> Result<Vec<bool>, InterpError> {
-    input
-        .drawn
-        .iter()
-        .map(|&d| Ok(input.mask.slice(input.axis, d)?.iter().any(|&x| x)))
-        .collect()
-}
 
 /// Whether skipped slice `s` lies between two drawn slices that both show
 /// the structure (inside the traced span, where a walk that covers less
@@ -445,7 +428,7 @@ impl ImageGuided {
             // `shape-auto` took the shape by rule, too little held out to rank
             // it (`auto::FEW_HELD_OUT`), and what is held out would rank the
             // image no better (see `THIN_SHAPE_GAP`).
-            if median_gap(&choice.compact.real) <= THIN_SHAPE_GAP {
+            if median_gap(&choice.compact.real).is_none_or(|g| g <= THIN_SHAPE_GAP) {
                 return Ok(plan);
             }
             let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
