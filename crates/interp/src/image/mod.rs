@@ -182,11 +182,39 @@ pub const EDGE_SEPARATION: f64 = 0.9;
 /// shape) to 0.75, level with the walker anchor, the walk winning at every
 /// edge separation from 0.6 up; at k = 3 (a gap of 4) the 3 such nuclei
 /// lost 0.08 to the walk (0.83 → 0.75) and at k = 5 (a gap of 6) those
-/// below [`EDGE_SEPARATION`] were even (0.80 against 0.80).
+/// below [`EDGE_SEPARATION`] were even (0.80 against 0.80). At k = 6 (a
+/// gap of 7) the walk gains over the copy: 0.7070 → 0.7130 with the gap
+/// at 7 rather than 8 (at k = 7 and 8 it loses to it, 0.5476 → 0.5336 and
+/// 0.5854 → 0.5800, and wins 0.7022 → 0.7410 at k = 9: where the drawn
+/// slices cut the nuclei decides more than the gap).
 ///
 /// The same gap as `shape-auto`'s copy of such objects
 /// ([`crate::auto::ALONE_COPY_GAP`]).
 pub const BLIND_WALK_GAP: usize = crate::auto::ALONE_COPY_GAP;
+
+/// Contrast of the traced boundary over the image's noise
+/// ([`model::edge_contrast`]: the mean step across the tracing over the
+/// median step between neighbours on one side, on the drawn slices as they
+/// are) from which an object `shape-auto` took by rule on too little held
+/// out walks across wide gaps ([`THIN_SHAPE_GAP`]).
+///
+/// Why not the blurred image's [`IntensityModel::separation`], as where
+/// nothing is held out ([`EDGE_SEPARATION`]): the walk's edge weights read
+/// the image as it is, voxel to voxel. Where noise is independent from one
+/// voxel to the next, a blur separates the two sides long before the walk
+/// can follow the edge: on a ball drawn every 4th–6th slice whose image
+/// carries such noise, the walk lost 0.05–0.08 to the shape at
+/// separations of 0.98–0.99 (contrasts of 1.3–1.6), came level at a
+/// contrast of 2.2 and won from 2.4 up (0.89–1.00 against 0.86).
+/// Microscope images are smooth at the pixel scale, and there the contrast
+/// ranks where the walk helps: on stardist's nuclei as a label volume
+/// (`interslice bench`, label-matched Dice on the skipped slices) at k = 3 /
+/// 4 / 5 / 6 / 7 / 8 0.8221 / 0.7990 / 0.7519 / 0.7020 / 0.5299 / 0.5785 →
+/// 0.8342 / 0.8071 / 0.7545 / 0.7052 / 0.5336 / 0.5800 against the
+/// separation's gate, with 2.5 and 3.0 between the two. Where the shape is
+/// poor (an object seen on one drawn slice, capped) the walk wins even on
+/// noise, and the separation's gate is kept there.
+pub const EDGE_CONTRAST: f64 = 2.0;
 
 /// Median gap, in slices, across which the shape `shape-auto` took by rule
 /// on too little held out (`auto::Choice::thin`: an object that ends inside
@@ -204,12 +232,13 @@ pub const BLIND_WALK_GAP: usize = crate::auto::ALONE_COPY_GAP;
 /// 0.7247 (the shape alone 0.9231 / 0.8794 / 0.8146 / 0.7824 / 0.7171).
 ///
 /// Across wider gaps such a label takes the whole-box walk where its drawn
-/// outlines lie on a clear edge ([`EDGE_SEPARATION`], as where nothing is
-/// held out) and keeps the shape otherwise: k = 3 / 4 / 5 / 6 / 7 / 8
-/// 0.8145 / 0.7897 / 0.7424 / 0.6756 / 0.5361 / 0.5496 → 0.8221 / 0.7990 /
-/// 0.7519 / 0.7020 / 0.5299 / 0.5785 (the fit instead of the shape below
-/// the edge: 0.8220 / 0.8016 / 0.7504 / 0.7023 / 0.5350 / 0.5713, but on
-/// a ball whose image is noise the fit lost 0.021 to the shape). Walking
+/// outlines lie on an edge the walk can follow ([`EDGE_CONTRAST`]) and
+/// keeps the shape otherwise. With the gate on the blurred separation at
+/// [`EDGE_SEPARATION`] instead: k = 3 / 4 / 5 / 6 / 7 / 8 0.8145 / 0.7897
+/// / 0.7424 / 0.6756 / 0.5361 / 0.5496 → 0.8221 / 0.7990 / 0.7519 / 0.7020
+/// / 0.5299 / 0.5785 (the fit instead of the shape below the edge: 0.8220
+/// / 0.8016 / 0.7504 / 0.7023 / 0.5350 / 0.5713, but on a ball whose image
+/// is noise the fit lost 0.021 to the shape). Walking
 /// every such label gained more there (0.8375 / 0.8090 / 0.7630 / 0.7146 /
 /// 0.5386 / 0.5806), but on that ball the walk lost to the shape (0.74
 /// against 0.86 at edge separations 0.58 and 0.76; 0.78 at 0.945, where
@@ -338,6 +367,12 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// [`IntensityModel::separation`] of the drawn slices (0.5 where they
+    /// gave no intensity model).
+    pub fn separation(&self) -> f64 {
+        self.model.as_ref().map_or(0.5, IntensityModel::separation)
+    }
+
     /// Whether the fusion reads the image (leave-one-out chose a weight
     /// `w > 0` and the drawn slices gave an intensity model); when not, the
     /// method's result is its shape prior, bit for bit.
@@ -382,6 +417,26 @@ impl ImageGuided {
         let plane = Plane::of(input);
         let raw = vol.slice(input.axis, s).expect("slice in range");
         blur(&raw, plane.width, plane.height)
+    }
+
+    /// [`model::edge_contrast`] of the drawn slices on the image as it is,
+    /// unblurred, as the walk's edge weights read it (0 where it cannot be
+    /// measured). `drawn_pairs` holds each drawn slice's mask.
+    fn edge_contrast(&self, input: &SparseMask<'_>, drawn_pairs: &[(Vec<bool>, Vec<f32>)]) -> f64 {
+        let raw: Vec<Vec<f32>> = input
+            .drawn
+            .par_iter()
+            .map(|&d| {
+                self.image
+                    .slice(input.axis, d)
+                    .expect("validated drawn index")
+            })
+            .collect();
+        let slices = drawn_pairs
+            .iter()
+            .zip(&raw)
+            .map(|((m, _), i)| (m.as_slice(), i.as_slice()));
+        model::edge_contrast(slices, &Plane::of(input)).unwrap_or(0.0)
     }
 
     /// Decide, on the drawn slices of `input`, the prior and the fusion.
@@ -431,8 +486,7 @@ impl ImageGuided {
             if median_gap(&choice.compact.real).is_none_or(|g| g <= THIN_SHAPE_GAP) {
                 return Ok(plan);
             }
-            let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
-            if sep >= EDGE_SEPARATION && !self.on_stack {
+            if !self.on_stack && self.edge_contrast(input, &drawn_pairs) >= EDGE_CONTRAST {
                 plan.walk = Walk::Box;
             }
             return Ok(plan);
@@ -444,7 +498,7 @@ impl ImageGuided {
         {
             // Nothing held out that shows the label: no evidence either way
             // (see `EDGE_SEPARATION` and `BLIND_WALK_GAP`).
-            let sep = plan.model.as_ref().map_or(0.5, IntensityModel::separation);
+            let sep = plan.separation();
             let wide = alone_across(input.drawn, &showing(input)?, BLIND_WALK_GAP);
             let trusted = sep >= EDGE_SEPARATION || wide;
             if !self.on_stack && trusted && !pole_fill(prior, input)? {

@@ -6,7 +6,7 @@ use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
-use interslice_interp::image::{ImageGuided, Walk, intensity_f32};
+use interslice_interp::image::{EDGE_SEPARATION, ImageGuided, Walk, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, dice_on, drawn_for_skip, score, sparse_of};
 use interslice_interp::{Interpolator, SparseMask};
 use proptest::prelude::*;
@@ -466,16 +466,30 @@ fn an_object_ending_inside_the_traced_range_seen_on_few_drawn_slices_walks_a_cle
     let s = dice_on(&shaped, &truth, Axis::Z, &skipped);
     let run = |amp: f32| {
         let method = ImageGuided::new(image_of(&truth, amp));
-        let walk = method.plan(&input).unwrap().walk;
+        let plan = method.plan(&input).unwrap();
         let guided = method.interpolate(input).unwrap();
-        (walk, dice_on(&guided, &truth, Axis::Z, &skipped))
+        (
+            plan.walk,
+            dice_on(&guided, &truth, Axis::Z, &skipped),
+            plan.separation(),
+        )
     };
     // A clear edge: the walk finds the ball's ends.
-    let (walk, g) = run(5.0);
+    let (walk, g, _) = run(5.0);
     assert_eq!(walk, Walk::Box);
     assert!(g > s + 0.05, "image-guided {g:.4} against the shape {s:.4}");
+    // Noise independent from voxel to voxel, on which the blurred image
+    // still separates the two sides (0.98): the walk would lose 0.05 to
+    // the shape, and is not taken.
+    let (walk, g, separation) = run(100.0);
+    assert!(separation >= EDGE_SEPARATION, "{separation}");
+    assert_eq!(walk, Walk::Off);
+    assert!(
+        g >= s - 0.005,
+        "image-guided {g:.4} against the shape {s:.4}"
+    );
     // Noise: no walk, and nothing lost to the shape.
-    let (walk, g) = run(3000.0);
+    let (walk, g, _) = run(3000.0);
     assert_eq!(walk, Walk::Off);
     assert!(
         g >= s - 0.005,
