@@ -39,13 +39,15 @@ fn on_stardist_nuclei_the_image_finds_what_the_shape_misses_and_never_loses() {
     let mask = labels.map(|l| l > 0);
     let guided = ImageGuided::new(Arc::new(intensity_f32(&image)));
     // Measured (skipped-slice Dice, shape-auto / image-guided): 0.9242 /
-    // 0.9242, 0.8441 / 0.8546, 0.7415 / 0.8001, 0.7376 / 0.7908 at k = 1, 3,
-    // 5, 9. Across wide gaps the shape prior drifts off the small nuclei and
-    // the band fusion pulls it back onto their edges; at k = 1 leave-one-out
-    // keeps the shape (one slice from a drawn one it is nearly exact, and
-    // the image's gain on the held-out slices does not clear the bar). The
-    // floors keep both honest.
-    for (k, floor) in [(1usize, 0.92), (3, 0.84), (5, 0.74), (9, 0.73)] {
+    // 0.9242, 0.8826 / 0.8826, 0.8441 / 0.8546, 0.7415 / 0.8001, 0.7376 /
+    // 0.7908 at k = 1, 2, 3, 5, 9. Across wide gaps the shape prior drifts
+    // off the small nuclei and the band fusion pulls it back onto their
+    // edges; at k = 1 leave-one-out keeps the shape (one slice from a drawn
+    // one it is nearly exact, and the image's gain on the held-out slices
+    // does not clear the bar), at k = 2 the fusion's floor does
+    // (`SHAPE_FLOOR_SHARE`; used, the fusion scored 0.8539). The floors
+    // keep both honest.
+    for (k, floor) in [(1usize, 0.92), (2, 0.87), (3, 0.84), (5, 0.74), (9, 0.73)] {
         let s = score(&ShapeAuto::default(), &mask, Axis::Z, k)
             .unwrap()
             .unwrap()
