@@ -45,7 +45,7 @@
 //! The matching, alignment and caps are written here: no crate offers
 //! slice-to-slice object correspondence for contour interpolation.
 use crate::sdf::{FAR, Map, drawn_maps, signed_distance};
-use crate::shape_cubic::{HermiteAt, pchip_slope, slope_bound};
+use crate::shape_cubic::{HermiteAt, blend_inside, pchip_slope, slope_bound};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
 use interslice_core::Mask;
@@ -813,7 +813,7 @@ fn blend<'a>(out: &mut [bool], x: BlendArgs<'a>, plane: &Plane) {
                 }
                 None => sec,
             };
-            if basis.value(ya, yb, m0, m1, hf) < 0.0 {
+            if blend_inside(basis.value(ya, yb, m0, m1, hf)) {
                 out[u + plane.width * v] = true;
             }
         }

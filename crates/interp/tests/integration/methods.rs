@@ -330,3 +330,40 @@ fn a_nucleolus_seen_on_one_drawn_slice_is_capped_best_on_average() {
         .unwrap();
     assert_eq!(best, "shape-aligned", "{mean:?}");
 }
+
+/// A disc of radius 3 pixels whose centre moves half a pixel a slice along
+/// x (slices 5–20), drawn every 6th slice: `shape-aligned` follows it in a
+/// moving frame, sampling the drawn maps at shifts that come to half a
+/// pixel on every other skipped slice. There the blend falls exactly on
+/// the pixel centres of the outline's two sides (`shape_cubic::blend_inside`):
+/// counted outside, they left 21 of the disc's 29 pixels (Dice 0.84 on
+/// those slices); counted inside, 31 (0.90). The slices at whole-pixel
+/// shifts are exact.
+#[test]
+fn a_small_disc_drifting_half_a_pixel_a_slice_keeps_its_area_in_shape_aligned() {
+    // Voxel centres sit at half-integer coordinates.
+    let truth = shape([48, 32, 40], [1.0; 3], |x, y, z| {
+        let k = z.floor();
+        (5.0..=20.0).contains(&k) && {
+            let (dx, dy) = (x.floor() - (20.0 + 0.5 * (k - 5.0)), y.floor() - 16.0);
+            dx * dx + dy * dy <= 9.0
+        }
+    });
+    let drawn = every(40, 6);
+    let method = interslice_interp::registry::by_name("shape-aligned").unwrap();
+    let out = run(method.as_ref(), &truth, Axis::Z, &drawn);
+    for z in (7..=17).filter(|z| z % 6 != 0) {
+        let (o, t) = (
+            out.slice(Axis::Z, z).unwrap(),
+            truth.slice(Axis::Z, z).unwrap(),
+        );
+        let both = o.iter().zip(&t).filter(|&(&a, &b)| a && b).count();
+        let (no, nt) = (
+            o.iter().filter(|&&x| x).count(),
+            t.iter().filter(|&&x| x).count(),
+        );
+        let d = 2.0 * both as f64 / (no + nt) as f64;
+        println!("slice {z}: {no} of {nt} pixels, Dice {d:.3}");
+        assert!(d > 0.88, "slice {z}: {no} pixels against {nt}, Dice {d:.3}");
+    }
+}
