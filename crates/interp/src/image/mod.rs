@@ -454,19 +454,24 @@ impl ImageGuided {
     /// unblurred, as the walk's edge weights read it (0 where it cannot be
     /// measured). `drawn_pairs` holds each drawn slice's mask.
     fn edge_contrast(&self, input: &SparseMask<'_>, drawn_pairs: &[(Vec<bool>, Vec<f32>)]) -> f64 {
-        let raw: Vec<Vec<f32>> = input
+        // Only the drawn slices that show the label are read: the rest
+        // hold no boundary.
+        let raw: Vec<Option<Vec<f32>>> = input
             .drawn
             .par_iter()
-            .map(|&d| {
-                self.image
-                    .slice(input.axis, d)
-                    .expect("validated drawn index")
+            .zip(drawn_pairs)
+            .map(|(&d, (m, _))| {
+                m.iter().any(|&x| x).then(|| {
+                    self.image
+                        .slice(input.axis, d)
+                        .expect("validated drawn index")
+                })
             })
             .collect();
         let slices = drawn_pairs
             .iter()
             .zip(&raw)
-            .map(|((m, _), i)| (m.as_slice(), i.as_slice()));
+            .filter_map(|((m, _), i)| Some((m.as_slice(), i.as_deref()?)));
         model::edge_contrast(slices, &Plane::of(input)).unwrap_or(0.0)
     }
 
