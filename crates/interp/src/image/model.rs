@@ -11,6 +11,25 @@ const BINS: usize = 48;
 const CLAMP: f32 = 3.0;
 /// Samples are taken within this many pixels of the traced boundary.
 const BAND_PX: f32 = 6.0;
+/// Fewest sampled pixels on each side of the tracing a measure is taken on.
+const MIN_SIDE: usize = 20;
+
+/// Which pixels of a drawn slice (`mask`, `image`) are sampled: within
+/// [`BAND_PX`] pixels of the traced boundary, of finite intensity. `None`
+/// where the slice holds no boundary (nothing, or nothing but, inside).
+fn sampled(mask: &[bool], image: &[f32], plane: &Plane) -> Option<Vec<bool>> {
+    if !mask.iter().any(|&x| x) || mask.iter().all(|&x| x) {
+        return None;
+    }
+    let band = BAND_PX * plane.spacing[0].min(plane.spacing[1]) as f32;
+    let d = signed_distance(mask, plane);
+    Some(
+        d.iter()
+            .zip(image)
+            .map(|(di, v)| di.abs() <= band && v.is_finite())
+            .collect(),
+    )
+}
 
 /// Log-likelihood ratio of "inside" per intensity bin.
 #[derive(Debug, Clone)]
@@ -30,21 +49,21 @@ impl IntensityModel {
         slices: impl Iterator<Item = (&'a [bool], &'a [f32])>,
         plane: &Plane,
     ) -> Option<IntensityModel> {
-        let px = plane.spacing[0].min(plane.spacing[1]) as f32;
         let mut inside = Vec::new();
         let mut outside = Vec::new();
         for (m, img) in slices {
-            if !m.iter().any(|&x| x) || m.iter().all(|&x| x) {
+            let Some(near) = sampled(m, img, plane) else {
                 continue;
-            }
-            let d = signed_distance(m, plane);
-            for ((&di, &v), &mi) in d.iter().zip(img).zip(m) {
-                if di.abs() <= BAND_PX * px && v.is_finite() {
-                    if mi { inside.push(v) } else { outside.push(v) }
+            };
+            for i in (0..m.len()).filter(|&i| near[i]) {
+                if m[i] {
+                    inside.push(img[i])
+                } else {
+                    outside.push(img[i])
                 }
             }
         }
-        if inside.len() < 20 || outside.len() < 20 {
+        if inside.len() < MIN_SIDE || outside.len() < MIN_SIDE {
             return None;
         }
         let mut all: Vec<(f32, bool)> = inside
@@ -124,17 +143,14 @@ pub fn edge_contrast<'a>(
     slices: impl Iterator<Item = (&'a [bool], &'a [f32])>,
     plane: &Plane,
 ) -> Option<f64> {
-    let px = plane.spacing[0].min(plane.spacing[1]) as f32;
     let w = plane.width;
     let (mut sum_in, mut n_in, mut sum_out, mut n_out) = (0.0f64, 0usize, 0.0f64, 0usize);
     let mut steps: Vec<f32> = Vec::new();
     for (m, img) in slices {
-        if !m.iter().any(|&x| x) || m.iter().all(|&x| x) {
+        let Some(near) = sampled(m, img, plane) else {
             continue;
-        }
-        let d = signed_distance(m, plane);
-        let near = |i: usize| d[i].abs() <= BAND_PX * px && img[i].is_finite();
-        for i in (0..m.len()).filter(|&i| near(i)) {
+        };
+        for i in (0..m.len()).filter(|&i| near[i]) {
             if m[i] {
                 sum_in += f64::from(img[i]);
                 n_in += 1;
@@ -145,13 +161,13 @@ pub fn edge_contrast<'a>(
             let right = (i % w + 1 < w).then_some(i + 1);
             let below = (i + w < m.len()).then_some(i + w);
             for j in [right, below].into_iter().flatten() {
-                if near(j) && m[j] == m[i] {
+                if near[j] && m[j] == m[i] {
                     steps.push((img[j] - img[i]).abs());
                 }
             }
         }
     }
-    if n_in < 20 || n_out < 20 || steps.is_empty() {
+    if n_in < MIN_SIDE || n_out < MIN_SIDE || steps.is_empty() {
         return None;
     }
     let mid = steps.len() / 2;
