@@ -8,10 +8,13 @@
 //! drawn slice; `c = 1` unless leave-one-out calibrated it
 //! ([`crate::image::ImageGuided`] fits `c` on the held-out drawn slices). The
 //! image-guided method writes `σ(c · |z|)` of its fused logit `z` instead.
+//! On a skipped slice the result leaves empty next to a drawn outline (the
+//! structure ended before it, how far past the outline no tracing says),
+//! the pixels under that outline are a coin toss ([`shape_confidence`]).
 use crate::SparseMask;
 use crate::image::fuse::tau;
 use crate::sdf::signed_distance;
-use crate::slices::{Plane, to_nearest_drawn};
+use crate::slices::{Plane, bracket, to_nearest_drawn};
 use interslice_core::{Mask, Volume};
 use rayon::prelude::*;
 
@@ -31,9 +34,7 @@ pub fn shape_confidence(mask: &Mask, input: &SparseMask<'_>, scale: f32) -> Volu
             let delta = to_nearest_drawn(drawn, s)?;
             let m = mask.slice(input.axis, s).expect("slice in range");
             if !m.iter().any(|&x| x) {
-                // Nothing on the slice between two drawn slices: as sure as
-                // the nearest drawn slice is empty.
-                return None;
+                return ended_confidence(input, s, scale);
             }
             let t = tau(&plane, delta);
             let phi = signed_distance(&m, &plane);
@@ -47,4 +48,72 @@ pub fn shape_confidence(mask: &Mask, input: &SparseMask<'_>, scale: f32) -> Volu
         }
     }
     out
+}
+
+/// Confidence on skipped slice `s` where the result is empty: `None` (as
+/// sure as a drawn slice) where neither drawn slice beside it shows the
+/// structure; else the structure ended before `s` although the nearer
+/// drawn slice `D` that shows it lies `δ` slices away, and how far it
+/// reaches past `D` is in no tracing. So a pixel inside `D`'s outline is
+/// as unsure as a boundary (0.5), one outside it as sure as its distance
+/// `φ_D` from that outline says, `max(½, σ(c · φ_D / τ(δ)))`.
+fn ended_confidence(input: &SparseMask<'_>, s: usize, scale: f32) -> Option<Vec<f32>> {
+    let plane = Plane::of(input);
+    let g = bracket(input.drawn, s)?;
+    let nearest = [input.drawn[g], input.drawn[g + 1]]
+        .into_iter()
+        .filter_map(|d| {
+            let m = input.mask.slice(input.axis, d).ok()?;
+            m.iter().any(|&x| x).then_some((d.abs_diff(s), m))
+        })
+        .min_by_key(|(delta, _)| *delta)?;
+    let t = tau(&plane, nearest.0 as f64);
+    let phi = signed_distance(&nearest.1, &plane);
+    Some(
+        phi.iter()
+            .map(|&d| sigmoid(scale * d / t).max(0.5))
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use interslice_core::{Axis, Geometry, LengthUnit};
+
+    /// A disc of radius 6 on drawn slice 0, slice 6 drawn empty; the
+    /// result keeps the disc on slice 1 and ends before slice 2.
+    #[test]
+    fn where_the_result_ends_before_a_drawn_outline_the_pixels_under_it_are_unsure() {
+        let g = Geometry::new([24, 24, 12], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        let disc = |i: usize, j: usize| (i as f64 - 12.0).hypot(j as f64 - 12.0) < 6.0;
+        let mut sparse = Mask::zeros(g.clone());
+        let mut result = Mask::zeros(g);
+        for j in 0..24 {
+            for i in 0..24 {
+                sparse.set(i, j, 0, disc(i, j));
+                for k in 0..2 {
+                    result.set(i, j, k, disc(i, j));
+                }
+            }
+        }
+        let drawn = [0usize, 6, 11];
+        let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+        let c = shape_confidence(&result, &input, 1.0);
+        for k in 2..6 {
+            // Under the disc: the structure may go on, a coin toss.
+            assert_eq!(c.get(12, 12, k), 0.5, "slice {k}");
+            // Just outside it, less sure the farther from slice 0; far out, sure.
+            let near = c.get(19, 12, k);
+            assert!(near > 0.5 && near < 0.99, "slice {k}: {near}");
+            assert!(c.get(0, 0, k) > 0.9, "slice {k}: {}", c.get(0, 0, k));
+        }
+        assert!(c.get(19, 12, 2) > c.get(19, 12, 5));
+        // The disc itself on slice 1: sure at its centre (6 pixels in).
+        assert!(c.get(12, 12, 1) > 0.95, "{}", c.get(12, 12, 1));
+        // Between two drawn-empty slices: as sure as they are.
+        for k in 7..11 {
+            assert!(c.slice(Axis::Z, k).unwrap().iter().all(|&x| x == 1.0));
+        }
+    }
 }

@@ -306,14 +306,15 @@ fn on_the_noisy_phantom_the_image_helps_on_wide_gaps_and_costs_nothing_on_narrow
     }
 }
 
-/// With two drawn slices nothing can be held out: the whole-box walk is
-/// used where the outlines lie on a clean intensity edge and move between
-/// the slices (the prior `shape-aligned`), the shape where intensity says
-/// little about them, or where the two outlines nest (the prior
-/// `shape-area`'s profile of a round structure, which the walk from two
-/// slices does not know).
+/// With two drawn slices nothing between them can be held out: each
+/// predicts the other by a copy of its outline, and the fusion fitted on
+/// that is used where the outlines lie on a clear intensity edge and the
+/// image mends the copy; the shape is kept, bit for bit, where intensity
+/// says little about the outlines, or where the copy is already right (the
+/// polar caps of a round structure, whose bulk between them the shape's
+/// profile gives).
 #[test]
-fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
+fn on_two_drawn_slices_the_image_is_read_on_a_clear_edge_only() {
     // A ball sheared along x: its outlines on the two drawn slices overlap
     // as one outline that moves.
     let truth = shape([40, 32, 24], [1.0; 3], |p| {
@@ -329,28 +330,38 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
     let skipped: Vec<usize> = (6..19).collect();
     let clear = ImageGuided::new(image_of(&truth, 5.0));
     let plan = clear.plan(&input).unwrap();
-    assert_eq!(plan.walk, Walk::Box);
-    let walked = clear.interpolate(input).unwrap();
+    assert!(plan.params.w > 0.0 && plan.walk == Walk::Off, "{plan:?}");
+    // Each copy is half wrong; the fusion puts it on the edge.
+    assert!(plan.loo_dice.0 < 0.6 && plan.loo_dice.1 > 0.95, "{plan:?}");
+    let guided = clear.interpolate(input).unwrap();
     let shaped = ShapeAuto::default().interpolate(input).unwrap();
-    let (w, s) = (
-        dice_on(&walked, &truth, Axis::Z, &skipped),
+    let (g, s) = (
+        dice_on(&guided, &truth, Axis::Z, &skipped),
         dice_on(&shaped, &truth, Axis::Z, &skipped),
     );
-    eprintln!("sheared: the walk {w:.4} against the shape {s:.4}");
-    assert!(w > s + 0.02, "the walk {w:.4} against the shape {s:.4}");
+    // Measured: 0.9959 against 0.7522.
+    eprintln!("sheared: the image {g:.4} against the shape {s:.4}");
+    assert!(g > s + 0.2, "the image {g:.4} against the shape {s:.4}");
     for &d in &drawn {
-        assert_eq!(
-            walked.slice(Axis::Z, d).unwrap(),
-            sparse.slice(Axis::Z, d).unwrap()
+        assert!(
+            guided.slice(Axis::Z, d).unwrap() == sparse.slice(Axis::Z, d).unwrap(),
+            "drawn slice {d} changed"
         );
     }
-    // Noise ten times the contrast: the shape alone, bit for bit.
+    // Noise ten times the contrast: the shape alone, bit for bit (there
+    // the fusion fitted on the two copies would mend them, 0.52 -> 0.72,
+    // and lose 0.013 on the skipped slices to the shape's blend).
     let noisy = ImageGuided::new(image_of(&truth, 800.0));
-    assert_eq!(noisy.plan(&input).unwrap().walk, Walk::Off);
-    assert_eq!(noisy.interpolate(input).unwrap(), shaped);
+    let plan = noisy.plan(&input).unwrap();
+    assert!(plan.separation() < EDGE_SEPARATION, "{plan:?}");
+    assert!(!plan.uses_image(), "{plan:?}");
+    assert!(
+        noisy.interpolate(input).unwrap() == shaped,
+        "noise changed the shape"
+    );
     // The ball upright, traced on its first and last slice: their small
-    // outlines are its polar caps, and the shape's profile of a round
-    // structure is kept however clean the edge.
+    // outlines are its polar caps, each the other's copy, and the shape's
+    // profile of a round structure is kept however clean the edge.
     let ball = shape([32, 32, 24], [1.0; 3], |p| {
         in_ellipsoid(p, [16.0, 16.0, 12.0], [10.0, 10.0, 10.0])
     });
@@ -362,9 +373,12 @@ fn on_two_drawn_slices_the_walk_follows_a_clear_edge_only() {
     let sparse = sparse_of(&ball, Axis::Z, &drawn);
     let input = SparseMask::new(&sparse, Axis::Z, &drawn);
     let clear = ImageGuided::new(image_of(&ball, 5.0));
-    assert_eq!(clear.plan(&input).unwrap().walk, Walk::Off);
+    assert!(!clear.plan(&input).unwrap().uses_image());
     let shaped = ShapeAuto::default().interpolate(input).unwrap();
-    assert_eq!(clear.interpolate(input).unwrap(), shaped);
+    assert!(
+        clear.interpolate(input).unwrap() == shaped,
+        "the caps changed"
+    );
     let s = dice_on(&shaped, &ball, Axis::Z, &skipped);
     eprintln!("upright {drawn:?}: the shape {s:.4}");
     assert!(s > 0.83, "the shape {s:.4}");
