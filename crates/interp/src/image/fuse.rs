@@ -33,6 +33,14 @@ pub struct Params {
     pub lambda: f32,
 }
 
+impl Params {
+    /// No image: the shape prior alone.
+    pub const SHAPE_ONLY: Params = Params {
+        w: 0.0,
+        lambda: 0.0,
+    };
+}
+
 /// Jacobi iterations of the smoothing.
 const ITERATIONS: usize = 12;
 

@@ -430,6 +430,98 @@ impl Plan {
         self.params.w > 0.0 && self.model.is_some()
     }
 
+    /// Fit the fusion on held-out `cases` whose shape-only
+    /// predictions are `predicted`: the prior's error that scales `τ`, the
+    /// `(w, λ)` of [`GRID`] with the best pooled Dice, kept only where it
+    /// clears [`MARGIN`], [`RHO`] and the floor ([`Plan::floor_share`]), and
+    /// the confidence's scale.
+    fn fit_fusion(&mut self, cases: &[Case<'_>], predicted: &[&[bool]], plane: &Plane) {
+        let plane = *plane;
+        // The prior's typical boundary error: the mean distance of its wrong
+        // pixels from its boundary.
+        let (sum, cnt) = cases
+            .iter()
+            .map(|(truth, phi, ..)| {
+                phi.iter()
+                    .zip(truth)
+                    .filter(|(d, t)| (**d < 0.0) != **t)
+                    .fold((0.0f64, 0u64), |a, (d, _)| {
+                        (a.0 + f64::from(d.abs()), a.1 + 1)
+                    })
+            })
+            .fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let px = plane.spacing[0].min(plane.spacing[1]);
+        let mean_reach = cases.iter().map(|c| c.3).sum::<f64>() / cases.len() as f64;
+        self.prior_error = (((sum / cnt.max(1) as f64).max(0.5 * px)) as f32, mean_reach);
+        let plan_tau = self.clone();
+        let score = |p: Params, model: &IntensityModel| -> f64 {
+            let acc = cases
+                .par_iter()
+                .map(|(truth, phi, img, delta)| {
+                    let t = (plan_tau.tau(*delta), *delta);
+                    overlap(&fuse(phi, img, model, &plane, t, p).0, truth)
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            pooled_dice(acc)
+        };
+        let base = {
+            let acc = cases
+                .iter()
+                .zip(predicted)
+                .map(|((truth, ..), p)| overlap(p, truth))
+                .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            pooled_dice(acc)
+        };
+        self.loo_dice = (base, base);
+        if let Some(model) = &self.model {
+            let mut best = (Params::SHAPE_ONLY, f64::NEG_INFINITY);
+            for (w, lambda) in GRID {
+                let p = Params { w, lambda };
+                let d = score(p, model);
+                if d > best.1 {
+                    best = (p, d);
+                }
+            }
+            // The image's floor: what the fusion gets wrong where the
+            // prior is already right (see `Plan::floor_share`).
+            let floor = if best.0.w > 0.0 {
+                let p = best.0;
+                let acc = cases
+                    .par_iter()
+                    .map(|(truth, _, img, delta)| {
+                        let d = (delta / 2.0).max(1.0);
+                        let t = (plan_tau.tau(d), d);
+                        let phi = signed_distance(truth, &plane);
+                        overlap(&fuse(&phi, img, model, &plane, t, p).0, truth)
+                    })
+                    .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+                1.0 - pooled_dice(acc)
+            } else {
+                0.0
+            };
+            let shape_error = 1.0 - base;
+            if best.1 > base + MARGIN
+                && 1.0 - best.1 < RHO * shape_error
+                && floor < self.floor_share() * shape_error
+            {
+                self.params = best.0;
+            }
+            self.loo_dice.1 = best.1;
+        }
+        // Calibrate the confidence: the scale of the logit with the least
+        // log-loss on the held-out slices (a one-parameter Platt scaling).
+        let flat = IntensityModel::flat();
+        let m = self.model.as_ref().unwrap_or(&flat);
+        let logits: Vec<(Vec<f32>, &Vec<bool>)> = cases
+            .par_iter()
+            .map(|(truth, phi, img, delta)| {
+                let t = (self.tau(*delta), *delta);
+                (fuse(phi, img, m, &plane, t, self.params).1, truth)
+            })
+            .collect();
+        self.scale = best_scale(&SCALES, logits.iter().map(|(z, t)| (z, *t)));
+    }
+
     /// The prior's scale `τ` at `delta` slices from the nearest drawn slice:
     /// the held-out boundary error scaled linearly with the distance.
     pub fn tau(&self, delta: f64) -> f32 {
@@ -496,10 +588,6 @@ impl ImageGuided {
         let plane = Plane::of(input);
         let choice = ShapeAuto::default().choose(input)?;
         let prior = choice.index;
-        let shape_only = Params {
-            w: 0.0,
-            lambda: 0.0,
-        };
         let drawn_pairs: Vec<(Vec<bool>, Vec<f32>)> = input
             .drawn
             .par_iter()
@@ -519,7 +607,7 @@ impl ImageGuided {
         );
         let mut plan = Plan {
             prior,
-            params: shape_only,
+            params: Params::SHAPE_ONLY,
             loo_dice: (f64::NAN, f64::NAN),
             walk: Walk::Off,
             walk_dice: (f64::NAN, f64::NAN, f64::NAN),
@@ -554,9 +642,11 @@ impl ImageGuided {
             let sep = plan.separation();
             let wide = alone_across(input.drawn, &showing(input)?, BLIND_WALK_GAP);
             let trusted = sep >= EDGE_SEPARATION || wide;
-            let (cases, copies) = cross_cases(input, &drawn_pairs, &plane);
-            if sep >= EDGE_SEPARATION && !cases.is_empty() {
-                self.fit_fusion(&mut plan, &cases, &copies, &plane);
+            if sep >= EDGE_SEPARATION {
+                let (cases, copies) = cross_cases(input, &drawn_pairs, &plane);
+                if !cases.is_empty() {
+                    plan.fit_fusion(&cases, &copies, &plane);
+                }
             }
             if !plan.fuses() && !self.on_stack && trusted && !pole_fill(prior, input)? {
                 plan.walk = Walk::Box;
@@ -586,115 +676,11 @@ impl ImageGuided {
             })
             .collect();
         let predicted: Vec<&[bool]> = held.iter().map(|h| h.predicted.as_slice()).collect();
-        self.fit_fusion(&mut plan, &cases, &predicted, &plane);
+        plan.fit_fusion(&cases, &predicted, &plane);
         if !self.on_stack {
             self.try_walk(input, &choice, &cases, &mut plan)?;
         }
         Ok(plan)
-    }
-
-    /// Fit the fusion of `plan` on held-out `cases` whose shape-only
-    /// predictions are `predicted`: the prior's error that scales `τ`, the
-    /// `(w, λ)` of [`GRID`] with the best pooled Dice, kept only where it
-    /// clears [`MARGIN`], [`RHO`] and the floor ([`Plan::floor_share`]), and
-    /// the confidence's scale.
-    fn fit_fusion(
-        &self,
-        plan: &mut Plan,
-        cases: &[Case<'_>],
-        predicted: &[&[bool]],
-        plane: &Plane,
-    ) {
-        let plane = *plane;
-        // The prior's typical boundary error: the mean distance of its wrong
-        // pixels from its boundary.
-        let (sum, cnt) = cases
-            .iter()
-            .map(|(truth, phi, ..)| {
-                phi.iter()
-                    .zip(truth)
-                    .filter(|(d, t)| (**d < 0.0) != **t)
-                    .fold((0.0f64, 0u64), |a, (d, _)| {
-                        (a.0 + f64::from(d.abs()), a.1 + 1)
-                    })
-            })
-            .fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        let px = plane.spacing[0].min(plane.spacing[1]);
-        let mean_reach = cases.iter().map(|c| c.3).sum::<f64>() / cases.len() as f64;
-        plan.prior_error = (((sum / cnt.max(1) as f64).max(0.5 * px)) as f32, mean_reach);
-        let plan_tau = plan.clone();
-        let score = |p: Params, model: &IntensityModel| -> f64 {
-            let acc = cases
-                .par_iter()
-                .map(|(truth, phi, img, delta)| {
-                    let t = (plan_tau.tau(*delta), *delta);
-                    overlap(&fuse(phi, img, model, &plane, t, p).0, truth)
-                })
-                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-            pooled_dice(acc)
-        };
-        let base = {
-            let acc = cases
-                .iter()
-                .zip(predicted)
-                .map(|((truth, ..), p)| overlap(p, truth))
-                .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-            pooled_dice(acc)
-        };
-        plan.loo_dice = (base, base);
-        if let Some(model) = &plan.model {
-            let mut best = (
-                Params {
-                    w: 0.0,
-                    lambda: 0.0,
-                },
-                f64::NEG_INFINITY,
-            );
-            for (w, lambda) in GRID {
-                let p = Params { w, lambda };
-                let d = score(p, model);
-                if d > best.1 {
-                    best = (p, d);
-                }
-            }
-            // The image's floor: what the fusion gets wrong where the
-            // prior is already right (see `Plan::floor_share`).
-            let floor = if best.0.w > 0.0 {
-                let p = best.0;
-                let acc = cases
-                    .par_iter()
-                    .map(|(truth, _, img, delta)| {
-                        let d = (delta / 2.0).max(1.0);
-                        let t = (plan_tau.tau(d), d);
-                        let phi = signed_distance(truth, &plane);
-                        overlap(&fuse(&phi, img, model, &plane, t, p).0, truth)
-                    })
-                    .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-                1.0 - pooled_dice(acc)
-            } else {
-                0.0
-            };
-            let shape_error = 1.0 - base;
-            if best.1 > base + MARGIN
-                && 1.0 - best.1 < RHO * shape_error
-                && floor < plan.floor_share() * shape_error
-            {
-                plan.params = best.0;
-            }
-            plan.loo_dice.1 = best.1;
-        }
-        // Calibrate the confidence: the scale of the logit with the least
-        // log-loss on the held-out slices (a one-parameter Platt scaling).
-        let flat = IntensityModel::flat();
-        let m = plan.model.as_ref().unwrap_or(&flat);
-        let logits: Vec<(Vec<f32>, &Vec<bool>)> = cases
-            .par_iter()
-            .map(|(truth, phi, img, delta)| {
-                let t = (plan.tau(*delta), *delta);
-                (fuse(phi, img, m, &plane, t, plan.params).1, truth)
-            })
-            .collect();
-        plan.scale = best_scale(&SCALES, logits.iter().map(|(z, t)| (z, *t)));
     }
 
     /// Whether the random walk predicts the held-out slices of one
