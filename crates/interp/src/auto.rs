@@ -472,7 +472,7 @@ fn ends_inside(shows: &[bool]) -> bool {
 /// at k = 3 and 5 the cap leads (0.835 against `nearest`'s 0.733 at k = 3,
 /// 0.742 against 0.723 at k = 5). No other mask of the benchmark has such
 /// an object.
-/// The same gap as the image method's walk of such objects
+/// With an image, such objects walk from a gap one slice narrower
 /// (`image::BLIND_WALK_GAP`).
 pub const ALONE_COPY_GAP: usize = 7;
 

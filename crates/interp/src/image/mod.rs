@@ -207,25 +207,31 @@ pub const EDGE_SEPARATION: f64 = 0.9;
 /// slices both show it (an object seen on one drawn slice, whose
 /// neighbours both lack it: a small nucleus of a label volume), the
 /// whole-box walk is used, whatever the edge, once some gap beside a drawn
-/// slice that shows the label spans at least this many slices. How far such an object reaches past its one outline is in no
-/// tracing: the shape methods guess it (a copy to half the gap, a cap),
-/// and the wider the gap the worse the guess, while the walk stops where
-/// the image does (and, on an image without an edge, fades towards the
-/// empty drawn slices as the guesses do). On stardist's nuclei as a label
-/// volume (`interslice bench`, label-matched Dice on the skipped slices)
-/// at k = 9 the 49 nuclei seen on one drawn slice went from 0.66 (the
-/// shape) to 0.75, level with the walker anchor, the walk winning at every
-/// edge separation from 0.6 up; at k = 3 (a gap of 4) the 3 such nuclei
-/// lost 0.08 to the walk (0.83 → 0.75) and at k = 5 (a gap of 6) those
-/// below [`EDGE_SEPARATION`] were even (0.80 against 0.80). At k = 6 (a
-/// gap of 7) the walk gains over the copy: 0.7070 → 0.7130 with the gap
-/// at 7 rather than 8 (at k = 7 and 8 it loses to it, 0.5476 → 0.5336 and
-/// 0.5854 → 0.5800, and wins 0.7022 → 0.7410 at k = 9: where the drawn
-/// slices cut the nuclei decides more than the gap).
+/// slice that shows the label spans at least this many slices. How far
+/// such an object reaches past its one outline is in no tracing: the shape
+/// methods guess it (a copy to half the gap, a cap), and the wider the gap
+/// the worse the guess, while the walk stops where the image does (and,
+/// on an image without an edge, fades towards the empty drawn slices as
+/// the guesses do). The walk decides past where the shape prior ends too
+/// (`decide_slices`): the guess is what it replaces.
 ///
-/// The same gap as `shape-auto`'s copy of such objects
-/// ([`crate::auto::ALONE_COPY_GAP`]).
-pub const BLIND_WALK_GAP: usize = crate::auto::ALONE_COPY_GAP;
+/// On stardist's nuclei as a label volume (`interslice bench`,
+/// label-matched Dice on the skipped slices) at k = 9 the 49 nuclei seen
+/// on one drawn slice went from 0.66 (the shape) to 0.75, level with the
+/// walker anchor, the walk winning at every edge separation from 0.6 up.
+/// The whole mask at k = 4 / 5 / 6 / 7 / 8 / 9: 0.8071 / 0.7545 / 0.7130 /
+/// 0.5336 / 0.5800 / 0.7410 with the gap at 7 and the walk kept inside
+/// the prior's slices, 0.8071 / 0.7570 / 0.7249 / 0.5454 / 0.5913 / 0.7405
+/// with the gap at 6 and the walk past them (the walker anchor 0.8299 /
+/// 0.7651 / 0.7335 / 0.5493 / 0.5918 / 0.7410: what is left between them
+/// is in the nuclei seen on two drawn slices, `THIN_SHAPE_GAP`). At 5
+/// k = 4 lost to the shape (0.8071 → 0.8039); at k = 3 (a gap of 4) the
+/// 3 such nuclei lost 0.08 to the walk (0.83 → 0.75).
+///
+/// One slice below `shape-auto`'s copy of such objects
+/// ([`crate::auto::ALONE_COPY_GAP`]): at a gap of 6 the shape caps them,
+/// and the walk follows the image past the cap.
+pub const BLIND_WALK_GAP: usize = 6;
 
 /// Contrast of the traced boundary over the image's noise
 /// ([`model::edge_contrast`]: the mean step across the tracing over the
@@ -360,7 +366,8 @@ pub enum Walk {
     /// it can follow the image anywhere between them (a thin class that
     /// the prior, interpolated across the gap, misplaces). Its objects are
     /// kept apart as the fusion's are: every pixel it adds belongs to the
-    /// prior object nearest along the slice.
+    /// prior object nearest along the slice (on a slice past where the
+    /// prior ends, the prior's nearest slice that shows the label).
     Box,
 }
 
@@ -826,7 +833,7 @@ impl ImageGuided {
         decide_slices(
             input,
             &prior,
-            (confidence, plan.scale),
+            ((confidence, plan.scale), false),
             |s, delta, phi| {
                 let img = self.image_slice(&self.image, input, s);
                 let t = (plan.tau(delta), delta);
@@ -867,16 +874,49 @@ fn walk_mask(field: bool, phi: &[f32], z: &[f32], plane: &Plane, reach: f32) -> 
 /// to keep the prior empty there; the volume assembled and, when
 /// `confidence.0`, the confidence: `confidence_of(logit)` on those slices,
 /// the shape's (at scale `confidence.1`) elsewhere.
+///
+/// With `beyond_prior`, a skipped slice where the prior is empty is decided
+/// too, `φ` that of the nearest slice where the prior shows the label (what
+/// keeps the decision's objects apart there): the whole-box walk follows
+/// the image past where the shape ends (see [`Walk::Box`]).
 fn decide_slices(
     input: &SparseMask<'_>,
     prior: &Mask,
-    confidence: (bool, f32),
+    (confidence, beyond_prior): ((bool, f32), bool),
     decide: impl Fn(usize, f64, &[f32]) -> Option<(Vec<bool>, Vec<f32>)> + Sync,
     confidence_of: impl Fn(f32) -> f32,
 ) -> Result<Run, InterpError> {
     let plane = Plane::of(input);
     let drawn = input.drawn;
     let n = input.mask.slice_count(input.axis);
+    let shows: Vec<bool> = (0..n)
+        .into_par_iter()
+        .map(|s| {
+            prior
+                .view(input.axis, s)
+                .expect("slice in range")
+                .iter()
+                .any(|x| x)
+        })
+        .collect();
+    let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
+    // The slice whose prior stands in for `s`'s: its own, or where it is
+    // empty and `beyond_prior`, the nearest within the drawn range that
+    // shows the label (the lower one on a tie).
+    let reference = |s: usize| -> Option<usize> {
+        if shows[s] {
+            return Some(s);
+        }
+        if !beyond_prior {
+            return None;
+        }
+        (1..=last - first).find_map(|d| {
+            [s.checked_sub(d), Some(s + d)]
+                .into_iter()
+                .flatten()
+                .find(|&t| (first..=last).contains(&t) && shows[t])
+        })
+    };
     let decided: Vec<Option<(Vec<bool>, Vec<f32>)>> = (0..n)
         .into_par_iter()
         .map(|s| {
@@ -884,10 +924,9 @@ fn decide_slices(
                 return None;
             }
             let delta = to_nearest_drawn(drawn, s)?;
-            let p = prior.slice(input.axis, s).expect("slice in range");
-            if !p.iter().any(|&x| x) {
-                return None;
-            }
+            let p = prior
+                .slice(input.axis, reference(s)?)
+                .expect("slice in range");
             decide(s, delta, &signed_distance(&p, &plane))
         })
         .collect();
@@ -927,6 +966,13 @@ impl ImageGuided {
         let seeds = |s: usize| band_seeds(prior, input, s);
         let boxed = plan.walk == Walk::Box;
         let spans = spanned(input)?;
+        let prior_shows = |s: usize| {
+            prior
+                .view(input.axis, s)
+                .expect("slice in range")
+                .iter()
+                .any(|x| x)
+        };
         let seeded: Option<&walk::Seeds<'_>> = (!boxed).then_some(&seeds);
         let Some(walked) = self.walker().walk_with(input, seeded)? else {
             return Ok(None);
@@ -934,10 +980,16 @@ impl ImageGuided {
         decide_slices(
             input,
             prior,
-            (confidence, plan.scale),
+            ((confidence, plan.scale), boxed),
             |s, delta, phi| {
                 let z = walked.logit(s, &plane)?;
-                let z = if spans(s) { walk::undiluted(z, phi) } else { z };
+                // Raised to the prior's area only where the prior shows the
+                // label on this slice (`phi` may be a neighbour's).
+                let z = if spans(s) && prior_shows(s) {
+                    walk::undiluted(z, phi)
+                } else {
+                    z
+                };
                 let reach = if boxed {
                     f32::INFINITY
                 } else {

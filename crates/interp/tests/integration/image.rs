@@ -510,3 +510,39 @@ fn an_object_ending_inside_the_traced_range_seen_on_few_drawn_slices_walks_a_cle
         "image-guided {g:.4} against the shape {s:.4}"
     );
 }
+
+#[test]
+fn the_whole_box_walk_follows_the_image_past_where_the_shape_ends() {
+    // 13 slices high (6..=18), seen on the drawn slice 12 only, with the
+    // empty drawn slices 4 and 20 beside it: gaps of 8, across which the
+    // shape copies the outline to half the gap and ends there.
+    let truth = shape([32, 32, 25], [1.0; 3], |p| {
+        in_ellipsoid(p, [16.0, 16.0, 12.5], [8.0, 8.0, 6.9])
+    });
+    let drawn = [4usize, 12, 20];
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let method = ImageGuided::new(image_of(&truth, 20.0));
+    assert_eq!(method.plan(&input).unwrap().walk, Walk::Box);
+    let guided = method.interpolate(input).unwrap();
+    let shaped = ShapeAuto::default().interpolate(input).unwrap();
+    let shows = |m: &Mask, s: usize| m.slice(Axis::Z, s).unwrap().iter().any(|&x| x);
+    let past: Vec<usize> = (5..20)
+        .filter(|&s| !shows(&shaped, s) && shows(&guided, s))
+        .collect();
+    assert!(!past.is_empty(), "the walk stopped where the shape ends");
+    for &s in &past {
+        assert!(shows(&truth, s), "slice {s} is past the object's end");
+    }
+    let skipped: Vec<usize> = (5..20).filter(|&s| s != 12).collect();
+    let (g, s) = (
+        dice_on(&guided, &truth, Axis::Z, &skipped),
+        dice_on(&shaped, &truth, Axis::Z, &skipped),
+    );
+    eprintln!("past the shape on {past:?}: image-guided {g:.4}, shape {s:.4}");
+    assert!(g > s + 0.05, "image-guided {g:.4} against the shape {s:.4}");
+    // Nothing outside the drawn range or on the empty drawn slices.
+    for s in [0, 3, 4, 20, 21, 24] {
+        assert!(!shows(&guided, s), "slice {s}");
+    }
+}
