@@ -1,5 +1,6 @@
-//! `interslice bench [--data DIR] [--skips 1,3,5,9] [--methods a,b] [--per-mask]
-//! [--json FILE] [--speed]`: the interpolation benchmark on the development data.
+//! `interslice bench [--data DIR] [--skips 1,3,5,9] [--methods a,b] [--masks m,n]
+//! [--per-mask] [--json FILE] [--speed]`: the interpolation benchmark on the
+//! development data.
 //!
 //! Every mask is run through the protocol of [`interslice_interp::protocol`]
 //! (first and last non-empty slice and every `(k + 1)`-th slice drawn along
@@ -42,6 +43,10 @@ pub struct Args {
         default_value = "nearest,shape-based,shape-aligned,shape-area,shape-auto,image-guided,random-walk"
     )]
     pub methods: Vec<String>,
+    /// Only these masks, comma-separated, as `--per-mask` names them (e.g.
+    /// `brain1,T1-class3`); every mask whose data is there when not given.
+    #[arg(long, value_delimiter = ',')]
+    pub masks: Vec<String>,
     /// Also print one line per mask.
     #[arg(long)]
     pub per_mask: bool,
@@ -95,7 +100,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.speed {
         return speed(&a.methods);
     }
-    let cases = load_cases(&a.data)?;
+    let cases = selected(load_cases(&a.data)?, &a.masks)?;
     let mut rows = Vec::new();
     for c in &cases {
         for name in &a.methods {
@@ -130,6 +135,25 @@ pub fn run(a: Args) -> Result<()> {
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
+}
+
+/// The cases named in `masks` (all of them when it is empty); an error
+/// naming the cases there are when one of `masks` is not among them.
+fn selected(cases: Vec<Case>, masks: &[String]) -> Result<Vec<Case>> {
+    if masks.is_empty() {
+        return Ok(cases);
+    }
+    if let Some(missing) = masks.iter().find(|m| !cases.iter().any(|c| &c.name == *m)) {
+        let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+        bail!(
+            "--masks: no mask {missing} in the data here (there are: {})",
+            names.join(", ")
+        );
+    }
+    Ok(cases
+        .into_iter()
+        .filter(|c| masks.contains(&c.name))
+        .collect())
 }
 
 /// The masks of every family whose data is there.

@@ -85,3 +85,46 @@ fn bench_scores_the_masks_and_the_label_volume_it_finds() {
     );
     assert!((all - each).abs() < 0.02, "{all} {each}");
 }
+
+#[test]
+fn bench_runs_only_the_masks_named_and_lists_them_for_a_name_it_lacks() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("rows.json");
+    let run = |masks: &str| {
+        bin()
+            .args([
+                "bench",
+                "--skips",
+                "3",
+                "--methods",
+                "nearest",
+                "--masks",
+                masks,
+            ])
+            .arg("--json")
+            .arg(&json)
+            .arg("--data")
+            .arg(dir.path())
+            .output()
+            .unwrap()
+    };
+    let out = run("phantom2-nucleus");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["mask"], "phantom2-nucleus");
+    assert!(rows[0]["dice_skipped"].as_f64().unwrap() > 0.8);
+    // A mask the data lacks: one line naming those there are, no rows.
+    std::fs::remove_file(&json).unwrap();
+    let out = run("phantom1-cell,brain1");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no mask brain1"), "{err}");
+    assert!(err.contains("phantom1-cell, phantom1-nucleus"), "{err}");
+    assert!(!json.exists());
+}
