@@ -876,14 +876,22 @@ impl ImageGuided {
 /// T1 k-means classes (`interslice bench`, skipped slices) the box walk
 /// without it gained 0.009–0.013 on class 2 and 0.008–0.018 on class 3
 /// at every k where it is taken, and reached or passed the walker anchor
-/// on classes 1–3 at k = 1, 3, 5 and 9. Objects that are not a field (two balls the image
-/// bridges) stay apart as before.
+/// on classes 1–3 at k = 1, 3, 5 and 9. Objects that are not a field (two
+/// balls the image bridges) stay apart as before.
 fn walk_mask(field: bool, phi: &[f32], z: &[f32], plane: &Plane, reach: f32) -> Vec<bool> {
     if field && reach == f32::INFINITY {
         z.iter().map(|&v| v > 0.0).collect()
     } else {
         separate(phi, z, plane, reach)
     }
+}
+
+/// Whether `mask` holds any voxel on slice `s` along `axis` (in range).
+fn shows_on(mask: &Mask, axis: Axis, s: usize) -> bool {
+    mask.view(axis, s)
+        .expect("slice in range")
+        .iter()
+        .any(|x| x)
 }
 
 /// Each skipped slice between drawn ones where the `prior` shows the label,
@@ -909,13 +917,7 @@ fn decide_slices(
     let n = input.mask.slice_count(input.axis);
     let shows: Vec<bool> = (0..n)
         .into_par_iter()
-        .map(|s| {
-            prior
-                .view(input.axis, s)
-                .expect("slice in range")
-                .iter()
-                .any(|x| x)
-        })
+        .map(|s| shows_on(prior, input.axis, s))
         .collect();
     let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
     // The slice whose prior stands in for `s`'s: its own, or where it is
@@ -984,13 +986,6 @@ impl ImageGuided {
         let seeds = |s: usize| band_seeds(prior, input, s);
         let boxed = plan.walk == Walk::Box;
         let spans = spanned(input)?;
-        let prior_shows = |s: usize| {
-            prior
-                .view(input.axis, s)
-                .expect("slice in range")
-                .iter()
-                .any(|x| x)
-        };
         let seeded: Option<&walk::Seeds<'_>> = (!boxed).then_some(&seeds);
         let Some(walked) = self.walker().walk_with(input, seeded)? else {
             return Ok(None);
@@ -1003,7 +998,7 @@ impl ImageGuided {
                 let z = walked.logit(s, &plane)?;
                 // Raised to the prior's area only where the prior shows the
                 // label on this slice (`phi` may be a neighbour's).
-                let z = if spans(s) && prior_shows(s) {
+                let z = if spans(s) && shows_on(prior, input.axis, s) {
                     walk::undiluted(z, phi)
                 } else {
                     z
