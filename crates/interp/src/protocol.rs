@@ -10,6 +10,7 @@
 //! same way on its foreground's slices, every label interpolated on its own
 //! ([`crate::interpolate_labels`]), and is scored by the label-matched Dice
 //! ([`label_dice_on`]).
+use crate::slices::shows_on;
 use crate::{InterpError, Interpolator, SparseMask, interpolate_labels};
 use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
 
@@ -18,7 +19,7 @@ use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
 pub fn drawn_for_skip(mask: &Mask, axis: Axis, k: usize) -> Option<Vec<usize>> {
     let n = mask.slice_count(axis);
     let nonempty: Vec<usize> = (0..n)
-        .filter(|&s| mask.view(axis, s).expect("in range").iter().any(|x| x))
+        .filter(|&s| shows_on(mask, axis, s).expect("in range"))
         .collect();
     let (&first, &last) = (nonempty.first()?, nonempty.last()?);
     (last > first).then(|| drawn_for(first, last, k))

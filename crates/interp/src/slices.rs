@@ -156,8 +156,14 @@ pub fn showing(input: &SparseMask<'_>) -> Result<Vec<bool>, InterpError> {
     input
         .drawn
         .iter()
-        .map(|&d| Ok(input.mask.slice(input.axis, d)?.iter().any(|&x| x)))
+        .map(|&d| shows_on(input.mask, input.axis, d))
         .collect()
+}
+
+/// Whether `mask` holds any voxel on slice `s` along `axis` (read in place,
+/// not copied); an error for a slice out of range.
+pub fn shows_on(mask: &Mask, axis: Axis, s: usize) -> Result<bool, InterpError> {
+    Ok(mask.view(axis, s)?.iter().any(|x| x))
 }
 
 /// The centroid `[u, v]` of the pixels inside a row-major slice `width`

@@ -54,7 +54,7 @@ use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill}
 use crate::confidence::{shape_confidence, sigmoid};
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
-use crate::slices::{Plane, assemble, median_gap, showing, to_nearest_drawn};
+use crate::slices::{Plane, assemble, median_gap, showing, shows_on, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
 use fuse::{Params, band, fuse, separate};
 use interslice_core::{AnyVolume, Axis, Mask, Volume};
@@ -886,14 +886,6 @@ fn walk_mask(field: bool, phi: &[f32], z: &[f32], plane: &Plane, reach: f32) -> 
     }
 }
 
-/// Whether `mask` holds any voxel on slice `s` along `axis` (in range).
-fn shows_on(mask: &Mask, axis: Axis, s: usize) -> bool {
-    mask.view(axis, s)
-        .expect("slice in range")
-        .iter()
-        .any(|x| x)
-}
-
 /// Each skipped slice between drawn ones where the `prior` shows the label,
 /// decided by `decide(s, δ, φ)` (`δ` the distance to the nearest drawn
 /// slice, `φ` the prior's signed distance) into its mask and a logit, `None`
@@ -917,7 +909,7 @@ fn decide_slices(
     let n = input.mask.slice_count(input.axis);
     let shows: Vec<bool> = (0..n)
         .into_par_iter()
-        .map(|s| shows_on(prior, input.axis, s))
+        .map(|s| shows_on(prior, input.axis, s).expect("slice in range"))
         .collect();
     let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
     // The slice whose prior stands in for `s`'s: its own, or where it is
@@ -998,7 +990,7 @@ impl ImageGuided {
                 let z = walked.logit(s, &plane)?;
                 // Raised to the prior's area only where the prior shows the
                 // label on this slice (`phi` may be a neighbour's).
-                let z = if spans(s) && shows_on(prior, input.axis, s) {
+                let z = if spans(s) && shows_on(prior, input.axis, s).expect("slice in range") {
                     walk::undiluted(z, phi)
                 } else {
                     z
