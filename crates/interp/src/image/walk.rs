@@ -56,17 +56,18 @@ impl RandomWalk {
     /// The method on `image` (on the grid of the masks it is given), on a
     /// box of any size (the benchmark's anchor).
     pub fn new(image: Arc<Volume<f32>>) -> RandomWalk {
-        RandomWalk {
-            image,
-            max_voxels: usize::MAX,
-        }
+        RandomWalk::within(image, usize::MAX)
     }
 
     /// The walk that declines a box of more than `max_voxels` voxels
     /// ([`RandomWalk::walk_with`] gives `None`): what a caller bounds the
-    /// memory of an optional walk by.
+    /// memory of an optional walk by. Non-finite voxels of `image` read as
+    /// their nearest finite neighbour ([`super::finite::finite`]).
     pub fn within(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
-        RandomWalk { image, max_voxels }
+        RandomWalk {
+            image: super::finite::finite(image),
+            max_voxels,
+        }
     }
 }
 

@@ -586,3 +586,66 @@ fn an_outline_that_jumps_between_drawn_slices_walks_a_clear_edge_and_keeps_its_s
     assert_eq!(noisy.plan(&input).unwrap().walk, Walk::Off);
     assert_eq!(noisy.interpolate(input).unwrap().data(), shaped.data());
 }
+
+#[test]
+fn holes_in_a_float_image_cost_the_image_guided_method_nothing() {
+    // A ball traced on its first and last slices and every sixth between,
+    // on a noisy image with NaN and ±∞ patches just outside it (no data
+    // there, as outside a scanner's field of view). Before the image was
+    // made finite the holes took the skipped slices from 0.983 to 0.890.
+    let truth = shape([40, 40, 30], [1.0; 3], |p| {
+        in_ellipsoid(p, [20.0, 20.0, 15.0], [10.0, 10.0, 8.3])
+    });
+    let drawn: Vec<usize> = (0..30)
+        .filter(|&s| shows_on(&truth, Axis::Z, s).unwrap())
+        .collect();
+    let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
+    let drawn: Vec<usize> = (first..last)
+        .step_by(6)
+        .chain(std::iter::once(last))
+        .collect();
+    let skipped: Vec<usize> = (first..last).filter(|s| !drawn.contains(s)).collect();
+    let clean = image_of(&truth, 60.0);
+    let mut holed = (*clean).clone();
+    for k in (0..30).step_by(3) {
+        for j in (0..40).step_by(2) {
+            for i in 5..9 {
+                holed.set(
+                    i,
+                    j,
+                    k,
+                    if (i + j) % 3 == 0 {
+                        f32::INFINITY
+                    } else {
+                        f32::NAN
+                    },
+                );
+            }
+        }
+    }
+    holed.set(30, 20, 12, f32::NEG_INFINITY);
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let shaped = ShapeAuto::default().interpolate(input).unwrap();
+    let s = dice_on(&shaped, &truth, Axis::Z, &skipped);
+    let run = |image: Volume<f32>| {
+        let method = ImageGuided::new(Arc::new(image));
+        let plan = method.plan(&input).unwrap();
+        assert!(plan.loo_dice.0.is_finite() && plan.loo_dice.1.is_finite());
+        // The fit smooths along the image's edges, whose weights read the holes.
+        assert!(plan.params.lambda > 0.0, "{:?}", plan.params);
+        dice_on(
+            &method.interpolate(input).unwrap(),
+            &truth,
+            Axis::Z,
+            &skipped,
+        )
+    };
+    let (c, h) = (run((*clean).clone()), run(holed));
+    eprintln!("skipped slices: clean image {c:.4}, with holes {h:.4}, shape {s:.4}");
+    assert!(h >= s, "with holes {h:.4} against the shape's {s:.4}");
+    assert!(
+        h >= c - 0.005,
+        "with holes {h:.4} against the clean image's {c:.4}"
+    );
+}
