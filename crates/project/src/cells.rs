@@ -2,6 +2,7 @@
 //! with what the API reports about it (range, histogram, content hash).
 use crate::error::ProjectError;
 use interslice_core::{AnyVolume, Volume, Voxel};
+use interslice_interp::image::conditioned::conditioned;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Component, Path, PathBuf};
@@ -361,12 +362,16 @@ impl LoadedCell {
         }
     }
 
-    /// The intensities as `f32` (values unchanged), shared by every
-    /// image-guided interpolation of this cell.
+    /// The intensities as `f32`, conditioned for the image-aware methods
+    /// ([`conditioned`]: finite, at a workable scale), shared by every
+    /// image-guided interpolation of this cell: conditioned once here, each
+    /// method built on it finds nothing to change and copies nothing.
     pub fn intensity(&self) -> std::sync::Arc<Volume<f32>> {
         self.intensity
             .get_or_init(|| {
-                std::sync::Arc::new(interslice_interp::image::intensity_f32(&self.volume))
+                conditioned(std::sync::Arc::new(
+                    interslice_interp::image::intensity_f32(&self.volume),
+                ))
             })
             .clone()
     }

@@ -46,7 +46,7 @@
 //! empty, nothing appears past the outermost drawn slices), distances are
 //! physical (any axis, anisotropic spacing), and neither the fusion nor the
 //! walk joins objects that the prior keeps apart.
-pub mod finite;
+pub mod conditioned;
 pub mod fuse;
 pub mod model;
 pub mod walk;
@@ -580,11 +580,11 @@ impl Plan {
 
 impl ImageGuided {
     /// The method on `image`; it must lie on the grid of the masks it is given
-    /// (checked by [`Interpolator::interpolate`]). Non-finite voxels read as
-    /// their nearest finite neighbour ([`finite::finite`]).
+    /// (checked by [`Interpolator::interpolate`]). It reads `image`
+    /// [`conditioned`](conditioned::conditioned): finite, at a workable scale.
     pub fn new(image: Arc<Volume<f32>>) -> ImageGuided {
         ImageGuided {
-            image: finite::finite(image),
+            image: conditioned::conditioned(image),
             on_stack: false,
             planned: None,
         }

@@ -61,11 +61,11 @@ impl RandomWalk {
 
     /// The walk that declines a box of more than `max_voxels` voxels
     /// ([`RandomWalk::walk_with`] gives `None`): what a caller bounds the
-    /// memory of an optional walk by. Non-finite voxels of `image` read as
-    /// their nearest finite neighbour ([`super::finite::finite`]).
+    /// memory of an optional walk by. It reads `image`
+    /// [`conditioned`](super::conditioned::conditioned): finite, at a workable scale.
     pub fn within(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
         RandomWalk {
-            image: super::finite::finite(image),
+            image: super::conditioned::conditioned(image),
             max_voxels,
         }
     }

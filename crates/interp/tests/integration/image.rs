@@ -587,24 +587,57 @@ fn an_outline_that_jumps_between_drawn_slices_walks_a_clear_edge_and_keeps_its_s
     assert_eq!(noisy.interpolate(input).unwrap().data(), shaped.data());
 }
 
+/// A ball traced on its first and last slices and every sixth between:
+/// the truth, its drawn and skipped slices.
+fn ball_every_sixth() -> (Mask, Vec<usize>, Vec<usize>) {
+    let truth = shape([40, 40, 30], [1.0; 3], |p| {
+        in_ellipsoid(p, [20.0, 20.0, 15.0], [10.0, 10.0, 8.3])
+    });
+    let showing: Vec<usize> = (0..30)
+        .filter(|&s| shows_on(&truth, Axis::Z, s).unwrap())
+        .collect();
+    let (first, last) = (showing[0], showing[showing.len() - 1]);
+    let drawn: Vec<usize> = (first..last)
+        .step_by(6)
+        .chain(std::iter::once(last))
+        .collect();
+    let skipped: Vec<usize> = (first..last).filter(|s| !drawn.contains(s)).collect();
+    (truth, drawn, skipped)
+}
+
+#[test]
+fn the_image_guided_method_reads_a_float_image_at_any_scale_or_offset() {
+    let (truth, drawn, skipped) = ball_every_sixth();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let image = image_of(&truth, 60.0);
+    let run = |f: &dyn Fn(f32) -> f32| {
+        let data = image.data().iter().map(|&v| f(v)).collect();
+        let img = Volume::from_vec(image.geometry().clone(), data).unwrap();
+        ImageGuided::new(Arc::new(img)).interpolate(input).unwrap()
+    };
+    let base = run(&|v| v);
+    let d = dice_on(&base, &truth, Axis::Z, &skipped);
+    for (name, f) in [
+        ("× 1e-30", &(|v: f32| v * 1e-30) as &dyn Fn(f32) -> f32),
+        ("× 1e20", &|v: f32| v * 1e20),
+        ("× 1e36", &|v: f32| v * 1e36),
+        ("+ 1e7", &|v: f32| (f64::from(v) + 1e7) as f32),
+    ] {
+        let other = run(f);
+        let o = dice_on(&other, &truth, Axis::Z, &skipped);
+        eprintln!("{name}: {o:.4} against {d:.4}");
+        assert!((o - d).abs() < 0.003, "{name}: {o:.4} against {d:.4}");
+    }
+}
+
 #[test]
 fn holes_in_a_float_image_cost_the_image_guided_method_nothing() {
     // A ball traced on its first and last slices and every sixth between,
     // on a noisy image with NaN and ±∞ patches just outside it (no data
     // there, as outside a scanner's field of view). Before the image was
     // made finite the holes took the skipped slices from 0.983 to 0.890.
-    let truth = shape([40, 40, 30], [1.0; 3], |p| {
-        in_ellipsoid(p, [20.0, 20.0, 15.0], [10.0, 10.0, 8.3])
-    });
-    let drawn: Vec<usize> = (0..30)
-        .filter(|&s| shows_on(&truth, Axis::Z, s).unwrap())
-        .collect();
-    let (first, last) = (drawn[0], drawn[drawn.len() - 1]);
-    let drawn: Vec<usize> = (first..last)
-        .step_by(6)
-        .chain(std::iter::once(last))
-        .collect();
-    let skipped: Vec<usize> = (first..last).filter(|s| !drawn.contains(s)).collect();
+    let (truth, drawn, skipped) = ball_every_sixth();
     let clean = image_of(&truth, 60.0);
     let mut holed = (*clean).clone();
     for k in (0..30).step_by(3) {
