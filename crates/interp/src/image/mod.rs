@@ -990,7 +990,7 @@ fn decide_slices(
 impl ImageGuided {
     /// The walk of [`Plan::walk`], bounded by [`MAX_WALK_VOXELS`].
     fn walker(&self) -> RandomWalk {
-        RandomWalk::within(self.image.clone(), MAX_WALK_VOXELS)
+        RandomWalk::on_conditioned(self.image.clone(), MAX_WALK_VOXELS)
     }
 
     /// The random walk of [`Plan::walk`] on `input` (in the band of `prior`

@@ -64,10 +64,14 @@ impl RandomWalk {
     /// memory of an optional walk by. It reads `image`
     /// [`conditioned`](super::conditioned::conditioned): finite, at a workable scale.
     pub fn within(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
-        RandomWalk {
-            image: super::conditioned::conditioned(image),
-            max_voxels,
-        }
+        RandomWalk::on_conditioned(super::conditioned::conditioned(image), max_voxels)
+    }
+
+    /// [`RandomWalk::within`] on an image already
+    /// [`conditioned`](super::conditioned::conditioned) (the image-guided
+    /// method's own), which is not scanned again.
+    pub(super) fn on_conditioned(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
+        RandomWalk { image, max_voxels }
     }
 }
 
