@@ -6,10 +6,9 @@
 use crate::cells::LoadedCell;
 use crate::error::ProjectError;
 use crate::groundtruth::{Tracing, sparse_mask};
-use interslice_core::{Axis, Cancel, Geometry, Volume};
+use interslice_core::{Axis, Cancel, Geometry};
 use interslice_interp::image::ImageGuided;
 use interslice_interp::{DEFAULT_METHOD, IMAGE_METHOD, Interpolator, SparseMask};
-use std::sync::Arc;
 
 /// The interpolator called `name` (slice-wise or mesh), or the default.
 pub fn method_by_name(name: Option<&str>) -> Result<Box<dyn Interpolator>, ProjectError> {
@@ -24,7 +23,7 @@ pub fn method_for_cell(
     cell: &LoadedCell,
 ) -> Result<Box<dyn Interpolator>, ProjectError> {
     match name {
-        Some(IMAGE_METHOD) => Ok(Box::new(ImageGuided::new(cell.intensity()))),
+        Some(IMAGE_METHOD) => Ok(Box::new(ImageGuided::on_conditioned(cell.intensity()))),
         other => method_by_name(other),
     }
 }
@@ -59,8 +58,8 @@ pub struct Recommendation {
     pub interpolator: Box<dyn Interpolator>,
 }
 
-/// The [`Recommendation`] for `label` along `axis` of `tracing` on the cell
-/// whose intensities are `image`: the image-guided method's plan
+/// The [`Recommendation`] for `label` along `axis` of `tracing` on `cell`
+/// (its intensities, [`LoadedCell::intensity`]): the image-guided method's plan
 /// ([`ImageGuided::plan`]), which interpolates the held-out drawn slices
 /// (and walks once in the band of the label's shape prior, and where that
 /// comes close once on its whole box), not the volume. With two drawn
@@ -71,7 +70,7 @@ pub fn recommend(
     geometry: &Geometry,
     label: u16,
     axis: Axis,
-    image: Arc<Volume<f32>>,
+    cell: &LoadedCell,
     cancel: &Cancel,
 ) -> Result<Recommendation, ProjectError> {
     cancel.check()?;
@@ -87,7 +86,7 @@ pub fn recommend(
         return shape();
     }
     let input = SparseMask::new(&mask, axis, &drawn).with_cancel(cancel);
-    let guided = ImageGuided::new(image);
+    let guided = ImageGuided::on_conditioned(cell.intensity());
     let plan = guided.plan(&input)?;
     cancel.check()?;
     if !plan.uses_image() {

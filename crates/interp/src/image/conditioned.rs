@@ -15,28 +15,6 @@ use interslice_core::Volume;
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// `image` with every non-finite voxel given the value of the nearest
-/// finite voxel along its row (x; the left one on a tie), or on a row
-/// without one the median of the finite voxels (0 where there are none).
-/// The same `Arc` where every voxel is finite.
-///
-/// Why the neighbour's value: it adds no edge where the finite data ends,
-/// so neither the fusion's smoothing nor the walk stops at the border of
-/// a hole in the data, and the intensity model reads it as it reads the
-/// pixels beside it.
-pub fn finite(image: Arc<Volume<f32>>) -> Arc<Volume<f32>> {
-    if image.data().par_iter().all(|v| v.is_finite()) {
-        return image;
-    }
-    let mut out = (*image).clone();
-    let fallback = median_finite(out.data());
-    let nx = out.dims()[0];
-    out.data_mut()
-        .par_chunks_mut(nx)
-        .for_each(|row| fill_row(row, fallback));
-    Arc::new(out)
-}
-
 /// Spread of intensities (largest minus smallest) above which, or below
 /// [`MIN_SPREAD`], an image is mapped linearly onto `[0, SPREAD]` before
 /// the image-aware methods read it ([`conditioned`]): the square of a
@@ -58,37 +36,63 @@ pub const MAX_OFFSET: f64 = 1e3;
 /// The spread a rescaled image is given ([`MAX_SPREAD`]).
 pub const SPREAD: f64 = 1000.0;
 
-/// `image` made [`finite`] and, where its spread lies outside
-/// [`MIN_SPREAD`]..=[`MAX_SPREAD`] or its values lie further from zero than
-/// [`MAX_OFFSET`] times it, mapped linearly onto `[0, SPREAD]`
-/// (computed in `f64`). Every statistic the methods read is a ratio of
-/// intensity differences, a rank or a histogram over the image's own
-/// range, so a linear map changes what they decide only by rounding; an
-/// image inside the range is kept as it is, bit for bit.
+/// `image` with every non-finite voxel given the value of the nearest
+/// finite voxel along its row (x; the left one on a tie), or on a row
+/// without one the median of the finite voxels (0 where there are none);
+/// then, where the spread of its values lies outside
+/// [`MIN_SPREAD`]..=[`MAX_SPREAD`] or they lie further from zero than
+/// [`MAX_OFFSET`] times it, mapped linearly onto `[0, SPREAD]` (computed
+/// in `f64`). The same `Arc`, after one pass over it, where nothing needs
+/// changing: CT, MR and microscopy are read as they are, bit for bit.
+///
+/// Why the neighbour's value: it adds no edge where the finite data ends,
+/// so neither the fusion's smoothing nor the walk stops at the border of
+/// a hole in the data, and the intensity model reads it as it reads the
+/// pixels beside it. Why a linear map is safe: every statistic the methods
+/// read is a ratio of intensity differences, a rank or a histogram over
+/// the image's own range, so it changes what they decide only by rounding.
 pub fn conditioned(image: Arc<Volume<f32>>) -> Arc<Volume<f32>> {
-    let image = finite(image);
-    let (lo, hi) = image
+    // One pass: the range of the finite values, and whether all are. The
+    // values filled in are copies of finite ones (or their median), so the
+    // range is that of the image once filled.
+    let (lo, hi, all_finite) = image
         .data()
         .par_iter()
         .fold(
-            || (f64::INFINITY, f64::NEG_INFINITY),
-            |(lo, hi), &v| (lo.min(f64::from(v)), hi.max(f64::from(v))),
+            || (f32::INFINITY, f32::NEG_INFINITY, true),
+            |(lo, hi, all), &v| {
+                if v.is_finite() {
+                    (lo.min(v), hi.max(v), all)
+                } else {
+                    (lo, hi, false)
+                }
+            },
         )
         .reduce(
-            || (f64::INFINITY, f64::NEG_INFINITY),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            || (f32::INFINITY, f32::NEG_INFINITY, true),
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 && b.2),
         );
+    let (lo, hi) = (f64::from(lo), f64::from(hi));
     let spread = hi - lo;
     let magnitude = lo.abs().max(hi.abs());
-    if spread <= 0.0
-        || ((MIN_SPREAD..=MAX_SPREAD).contains(&spread) && magnitude <= MAX_OFFSET * spread)
-    {
+    let rescale = spread > 0.0
+        && !((MIN_SPREAD..=MAX_SPREAD).contains(&spread) && magnitude <= MAX_OFFSET * spread);
+    if all_finite && !rescale {
         return image;
     }
     let mut out = (*image).clone();
-    out.data_mut()
-        .par_iter_mut()
-        .for_each(|v| *v = ((f64::from(*v) - lo) / spread * SPREAD) as f32);
+    if !all_finite {
+        let fallback = median_finite(out.data());
+        let nx = out.dims()[0];
+        out.data_mut()
+            .par_chunks_mut(nx)
+            .for_each(|row| fill_row(row, fallback));
+    }
+    if rescale {
+        out.data_mut()
+            .par_iter_mut()
+            .for_each(|v| *v = ((f64::from(*v) - lo) / spread * SPREAD) as f32);
+    }
     Arc::new(out)
 }
 
@@ -154,7 +158,7 @@ mod tests {
                 nan, nan, nan, nan, nan, // no finite value: the median of all
             ],
         );
-        let f = finite(v);
+        let f = conditioned(v);
         assert_eq!(
             f.data(),
             &[
@@ -164,14 +168,13 @@ mod tests {
             ]
         );
         // Nothing finite at all: zeros.
-        let f = finite(volume([2, 1, 1], vec![nan, -inf]));
+        let f = conditioned(volume([2, 1, 1], vec![nan, -inf]));
         assert_eq!(f.data(), &[0.0, 0.0]);
     }
 
     #[test]
     fn a_finite_image_is_kept_as_it_is() {
         let v = volume([2, 2, 1], vec![1.0, 2.0, 3.0, 4.0]);
-        assert!(Arc::ptr_eq(&finite(v.clone()), &v));
         assert!(Arc::ptr_eq(&conditioned(v.clone()), &v));
         let flat = volume([2, 1, 1], vec![7.0, 7.0]);
         assert!(Arc::ptr_eq(&conditioned(flat.clone()), &flat));
@@ -179,14 +182,18 @@ mod tests {
 
     #[test]
     fn an_image_of_extreme_scale_or_offset_is_mapped_onto_a_thousand() {
-        for scale in [1e-30f32, 1e20, 1e36] {
+        for (scale, offset) in [(1e-30f32, 0.0f32), (1e20, 0.0), (1e36, 0.0), (1.0, 1e7)] {
             let v = volume(
                 [4, 1, 1],
-                [1.0f32, 2.0, 3.0, 5.0].map(|x| x * scale).to_vec(),
+                [1.0f32, 2.0, 3.0, 5.0].map(|x| x * scale + offset).to_vec(),
             );
             let c = conditioned(v);
             for (got, want) in c.data().iter().zip([0.0, 250.0, 500.0, 1000.0]) {
-                assert!((got - want).abs() < 1e-3, "scale {scale}: {:?}", c.data());
+                assert!(
+                    (got - want).abs() < 1e-3,
+                    "x{scale} +{offset}: {:?}",
+                    c.data()
+                );
             }
         }
     }

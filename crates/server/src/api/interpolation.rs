@@ -121,12 +121,7 @@ pub(super) async fn interpolate(
         };
         let rec = if body.recommend {
             Some(methods::recommend(
-                &tracing,
-                &g,
-                body.label,
-                axis,
-                c.intensity(),
-                cancel,
+                &tracing, &g, body.label, axis, &c, cancel,
             )?)
         } else {
             None
