@@ -896,7 +896,7 @@ impl ImageGuided {
             input,
             &prior,
             ((confidence, plan.scale), false),
-            |s, delta, phi| {
+            |s, delta, phi, _own| {
                 let img = self.image_slice(&self.image, input, s);
                 let t = (plan.tau(delta), delta);
                 Some(fuse(phi, &img, model, &plane, t, plan.params))
@@ -930,8 +930,9 @@ fn walk_mask(field: bool, phi: &[f32], z: &[f32], plane: &Plane, reach: f32) -> 
 }
 
 /// Each skipped slice between drawn ones where the `prior` shows the label,
-/// decided by `decide(s, δ, φ)` (`δ` the distance to the nearest drawn
-/// slice, `φ` the prior's signed distance) into its mask and a logit, `None`
+/// decided by `decide(s, δ, φ, own)` (`δ` the distance to the nearest drawn
+/// slice, `φ` the prior's signed distance, `own` whether that is `s`'s own
+/// prior rather than a neighbour's) into its mask and a logit, `None`
 /// to keep the prior empty there; the volume assembled and, when
 /// `confidence.0`, the confidence: `confidence_of(logit)` on those slices,
 /// the shape's (at scale `confidence.1`) elsewhere.
@@ -944,7 +945,7 @@ fn decide_slices(
     input: &SparseMask<'_>,
     prior: &Mask,
     (confidence, beyond_prior): ((bool, f32), bool),
-    decide: impl Fn(usize, f64, &[f32]) -> Option<(Vec<bool>, Vec<f32>)> + Sync,
+    decide: impl Fn(usize, f64, &[f32], bool) -> Option<(Vec<bool>, Vec<f32>)> + Sync,
     confidence_of: impl Fn(f32) -> f32,
 ) -> Result<Run, InterpError> {
     let plane = Plane::of(input);
@@ -982,7 +983,7 @@ fn decide_slices(
             let p = prior
                 .slice(input.axis, reference(s)?)
                 .expect("slice in range");
-            decide(s, delta, &signed_distance(&p, &plane))
+            decide(s, delta, &signed_distance(&p, &plane), shows[s])
         })
         .collect();
     let mask = assemble(input, |s| decided[s].as_ref().map(|f| f.0.clone()))?;
@@ -1029,11 +1030,11 @@ impl ImageGuided {
             input,
             prior,
             ((confidence, plan.scale), boxed),
-            |s, delta, phi| {
+            |s, delta, phi, own| {
                 let z = walked.logit(s, &plane)?;
                 // Raised to the prior's area only where the prior shows the
-                // label on this slice (`phi` may be a neighbour's).
-                let z = if spans(s) && shows_on(prior, input.axis, s).expect("slice in range") {
+                // label on this slice (not where `phi` is a neighbour's).
+                let z = if spans(s) && own {
                     walk::undiluted(z, phi)
                 } else {
                     z
