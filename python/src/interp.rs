@@ -7,12 +7,12 @@ use crate::metrics::spacing3;
 use crate::volumes::geometry;
 use crate::{error, parse_axis};
 use interslice_core::{Axis, LengthUnit, Volume, Voxel};
+use interslice_interp::image::Conditioned;
 use interslice_interp::labels::{DEFAULT_MAX_LABELS, DrawnLabels, interpolate_drawn_as};
 use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::sync::Arc;
 
 /// Interpolate the slices between the drawn slices of a label array, as
 /// `interslice interpolate` does (the same result voxel for voxel).
@@ -117,7 +117,7 @@ struct Tracing {
     axis: Axis,
     drawn: Vec<usize>,
     method: Box<dyn Interpolator>,
-    image: Option<Arc<Volume<f32>>>,
+    image: Option<Conditioned>,
 }
 
 impl Tracing {
@@ -161,7 +161,9 @@ impl Tracing {
                     )));
                 }
                 let data = intensities_f32(py, &i);
-                Some(Arc::new(Volume::from_vec(ig, data).map_err(error)?))
+                Some(Conditioned::from(
+                    Volume::from_vec(ig, data).map_err(error)?,
+                ))
             }
             None => None,
         };

@@ -101,7 +101,7 @@ fn bench_multi_axis_128(c: &mut Criterion) {
 fn bench_advise_256x256x60(c: &mut Criterion) {
     use interslice_core::Geometry;
     use interslice_interp::advise::advise;
-    use std::sync::Arc;
+    use interslice_interp::image::Conditioned;
     let p = generate(&PhantomParams {
         size: 256,
         seed: 1,
@@ -122,7 +122,8 @@ fn bench_advise_256x256x60(c: &mut Criterion) {
     };
     let image = image.map(f32::from);
     let image = image.data()[z0 * plane..(z0 + nz) * plane].to_vec();
-    let image = Arc::new(Volume::from_vec(block(p.labels.geometry()), image).expect("block"));
+    let image =
+        Conditioned::from(Volume::from_vec(block(p.labels.geometry()), image).expect("block"));
     let drawn: Vec<usize> = (0..nz).step_by(10).chain([nz - 1]).collect();
     let mut sparse: LabelVolume = Volume::zeros(labels.geometry().clone());
     for &d in &drawn {

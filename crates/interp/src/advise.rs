@@ -52,14 +52,14 @@
 //! expected error it lowers most, spread evenly in its gap.
 use crate::area_profile::{fit_slices, parabola};
 use crate::auto::field_of_pieces;
+use crate::image::conditioned::Conditioned;
 use crate::labels::{DrawnLabels, sorted_drawn};
 use crate::loo::Compact;
 use crate::predict::{LeaveOneOut, estimate, held_out_errors};
 use crate::{InterpError, Interpolator, SparseMask, by_name_with_image};
-use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_core::{Axis, LabelVolume, Mask};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::Arc;
 
 /// One suggested slice.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -410,7 +410,7 @@ pub fn advise(
     drawn: &[usize],
     count: usize,
     method: Option<&str>,
-    image: Option<Arc<Volume<f32>>>,
+    image: Option<Conditioned>,
 ) -> Result<Advice, InterpError> {
     let drawn = sorted_drawn(sparse, axis, drawn)?;
     if let Some(img) = &image {
@@ -792,14 +792,14 @@ mod tests {
     fn with_an_image_the_advice_comes_from_the_image_aware_method() {
         let drawn = [0, 10, 20, 30, 39];
         let (full, sparse) = traced(&drawn);
-        let image = Arc::new(full.map(|v| if v == 1 { 180.0f32 } else { 30.0 }));
+        let image = Conditioned::from(full.map(|v| if v == 1 { 180.0f32 } else { 30.0 }));
         let a = advise(&sparse, Axis::Z, &drawn, 3, None, Some(image)).unwrap();
         assert_eq!(a.suggestions.len(), 3);
         assert!(a.predicted_dice > 0.5 && a.predicted_dice <= 1.0);
         // An image on another grid is refused.
         let g =
             interslice_core::Geometry::new([8, 8, 8], [1.0; 3], LengthUnit::Micrometre).unwrap();
-        let small = Arc::new(Volume::filled(g, 1.0f32));
+        let small = Conditioned::from(Volume::filled(g, 1.0f32));
         assert!(advise(&sparse, Axis::Z, &drawn, 3, None, Some(small)).is_err());
     }
 

@@ -1,8 +1,7 @@
 //! The list of interpolators, by `--method` name. The default comes first.
 use crate::image::ImageGuided;
+use crate::image::conditioned::Conditioned;
 use crate::{InterpError, Interpolator};
-use interslice_core::Volume;
-use std::sync::Arc;
 
 /// The method used when none is named (and no image is given): the
 /// leave-one-out choice among the shape methods (see `docs/interpolation.md`).
@@ -49,7 +48,7 @@ pub fn by_name(name: &str) -> Result<Box<dyn Interpolator>, InterpError> {
 /// image methods need `image`; an unknown name lists the valid ones.
 pub fn by_name_with_image(
     name: Option<&str>,
-    image: Option<Arc<Volume<f32>>>,
+    image: Option<Conditioned>,
 ) -> Result<Box<dyn Interpolator>, InterpError> {
     match (name, image) {
         (None | Some(IMAGE_METHOD), Some(img)) => Ok(Box::new(ImageGuided::new(img))),

@@ -2,7 +2,7 @@
 //! with what the API reports about it (range, histogram, content hash).
 use crate::error::ProjectError;
 use interslice_core::{AnyVolume, Volume, Voxel};
-use interslice_interp::image::conditioned::conditioned;
+use interslice_interp::image::Conditioned;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Component, Path, PathBuf};
@@ -247,7 +247,7 @@ pub struct LoadedCell {
     pub content_hash: String,
     /// The voxels as `f32` for the image-guided method, made on its first use
     /// (four bytes a voxel, so only cells interpolated with the image pay it).
-    intensity: std::sync::OnceLock<std::sync::Arc<Volume<f32>>>,
+    intensity: std::sync::OnceLock<Conditioned>,
 }
 
 fn histogram<T: Voxel>(v: &Volume<T>, min: f64, width: f64) -> Vec<u64> {
@@ -362,16 +362,14 @@ impl LoadedCell {
         }
     }
 
-    /// The intensities as `f32`, conditioned for the image-aware methods
-    /// ([`conditioned`]: finite, at a workable scale), shared by every
-    /// image-guided interpolation of this cell: conditioned once here, each
-    /// method built on it finds nothing to change and copies nothing.
-    pub fn intensity(&self) -> std::sync::Arc<Volume<f32>> {
+    /// The intensities as `f32`, [`Conditioned`] for the image-aware methods
+    /// (finite, at a workable scale), shared by every image-guided
+    /// interpolation and advice on this cell: conditioned once here, never
+    /// scanned or copied again.
+    pub fn intensity(&self) -> Conditioned {
         self.intensity
             .get_or_init(|| {
-                conditioned(std::sync::Arc::new(
-                    interslice_interp::image::intensity_f32(&self.volume),
-                ))
+                Conditioned::from(interslice_interp::image::intensity_f32(&self.volume))
             })
             .clone()
     }

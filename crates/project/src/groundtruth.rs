@@ -15,6 +15,7 @@ use crate::error::ProjectError;
 use interslice_core::contour_file::ContourFile;
 use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, Volume};
 use interslice_interp::confidence::shape_confidence;
+use interslice_interp::image::Conditioned;
 use interslice_interp::{InterpError, Interpolator, SparseMask, multi_axis};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
@@ -157,7 +158,7 @@ pub fn advise_label(
     axis: Axis,
     count: usize,
     method: Option<&str>,
-    image: Option<Arc<Volume<f32>>>,
+    image: Option<Conditioned>,
 ) -> Result<interslice_interp::advise::Advice, ProjectError> {
     let (mask, drawn) = sparse_mask(tracing, geometry, label, axis)?;
     let data = mask

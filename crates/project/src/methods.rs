@@ -23,7 +23,7 @@ pub fn method_for_cell(
     cell: &LoadedCell,
 ) -> Result<Box<dyn Interpolator>, ProjectError> {
     match name {
-        Some(IMAGE_METHOD) => Ok(Box::new(ImageGuided::on_conditioned(cell.intensity()))),
+        Some(IMAGE_METHOD) => Ok(Box::new(ImageGuided::new(cell.intensity()))),
         other => method_by_name(other),
     }
 }
@@ -86,7 +86,7 @@ pub fn recommend(
         return shape();
     }
     let input = SparseMask::new(&mask, axis, &drawn).with_cancel(cancel);
-    let guided = ImageGuided::on_conditioned(cell.intensity());
+    let guided = ImageGuided::new(cell.intensity());
     let plan = guided.plan(&input)?;
     cancel.check()?;
     if !plan.uses_image() {

@@ -17,7 +17,7 @@ use anyhow::{Context, Result, bail};
 use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, LabelVolume, Mask, Volume};
 use interslice_interp::image::walk::RandomWalk;
-use interslice_interp::image::{ImageGuided, intensity_f32};
+use interslice_interp::image::{Conditioned, ImageGuided, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, score, score_labels};
 use interslice_interp::{Interpolator, by_name};
 use serde::Serialize;
@@ -63,7 +63,7 @@ struct Case {
     family: &'static str,
     name: String,
     truth: Truth,
-    image: Option<Arc<Volume<f32>>>,
+    image: Option<Conditioned>,
 }
 
 /// What a case is traced from.
@@ -262,10 +262,7 @@ fn read_on_grid(path: &Path, labels: &LabelVolume) -> Result<Volume<f32>> {
 
 /// The method `name`, on `image` for the image methods (`None`: an image
 /// method without an image, skipped).
-fn method_on(
-    name: &str,
-    image: Option<&Arc<Volume<f32>>>,
-) -> Result<Option<Box<dyn Interpolator>>> {
+fn method_on(name: &str, image: Option<&Conditioned>) -> Result<Option<Box<dyn Interpolator>>> {
     Ok(match (name, image) {
         ("image-guided", Some(img)) => Some(Box::new(ImageGuided::new(img.clone()))),
         ("random-walk", Some(img)) => Some(Box::new(RandomWalk::new(img.clone()))),
@@ -294,7 +291,7 @@ fn cropped(
             Truth::Labels(l) => Truth::Labels(crop(&l, bbox)?),
         },
         image: match image {
-            Some(i) => Some(Arc::new(crop(i, bbox)?)),
+            Some(i) => Some(Conditioned::from(crop(i, bbox)?)),
             None => None,
         },
     })
@@ -383,7 +380,7 @@ fn speed(methods: &[String]) -> Result<()> {
             [lo, lo + dims[a]]
         });
         let m = crop(&mask, bbox)?;
-        let img = Arc::new(crop(&image, bbox)?);
+        let img = Conditioned::from(crop(&image, bbox)?);
         for name in methods {
             let method = method_on(name, Some(&img))?.context("an image method needs the image")?;
             let s =

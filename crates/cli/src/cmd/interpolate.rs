@@ -20,13 +20,12 @@
 use anyhow::{Context, Result, bail};
 use interslice_core::{AnyVolume, Axis, LabelVolume, Volume};
 use interslice_interp::drawn::{nonempty_slices, parse_drawn};
-use interslice_interp::image::intensity_f32;
+use interslice_interp::image::{Conditioned, intensity_f32};
 use interslice_interp::{
     DEFAULT_METHOD, IMAGE_METHOD, Interpolator, by_name_with_image, interpolate_labels,
     interpolate_labels_with_confidence, methods,
 };
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// Arguments of `interpolate`.
 #[derive(clap::Args)]
@@ -79,7 +78,7 @@ pub struct SparseInput {
     pub volume: AnyVolume,
     pub sparse: LabelVolume,
     pub method: Box<dyn Interpolator>,
-    pub image: Option<Arc<Volume<f32>>>,
+    pub image: Option<Conditioned>,
     pub drawn: Vec<usize>,
 }
 
@@ -99,7 +98,7 @@ impl TracingArgs {
             .to_labels()
             .with_context(|| format!("{} is not a label volume", path.display()))?;
         let image = match &self.image {
-            Some(p) => Some(Arc::new(read_image(p, &sparse)?)),
+            Some(p) => Some(Conditioned::from(read_image(p, &sparse)?)),
             None => None,
         };
         let method = by_name_with_image(self.method.as_deref(), image.clone())?;

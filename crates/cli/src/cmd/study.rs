@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use interslice_core::Axis;
 use interslice_interp::drawn::nonempty_slices;
+use interslice_interp::image::Conditioned;
 use interslice_interp::{IMAGE_METHOD, Interpolator, by_name_with_image, methods};
 use interslice_project::report::study::{
     Provenance, Row, StudyReport, effort_curve, measure, phantom_command, write,
@@ -74,7 +75,7 @@ pub fn run(a: Args) -> Result<()> {
     let gt = interslice_io::read_labels(&a.ground_truth)
         .with_context(|| format!("reading {}", a.ground_truth.display()))?;
     let image = match &a.image {
-        Some(p) => Some(std::sync::Arc::new(super::interpolate::read_image(p, &gt)?)),
+        Some(p) => Some(Conditioned::from(super::interpolate::read_image(p, &gt)?)),
         None => None,
     };
     let chosen: Vec<Box<dyn Interpolator>> = match &a.methods {
@@ -265,7 +266,7 @@ fn run_strategies(
     a: &Args,
     names: &[String],
     gt: &interslice_core::LabelVolume,
-    image: Option<std::sync::Arc<interslice_core::Volume<f32>>>,
+    image: Option<Conditioned>,
     first: usize,
     last: usize,
     labels: &[u16],

@@ -13,7 +13,35 @@
 //! 1e7, where `f32` rounds the steps between neighbours, 0.996.
 use interslice_core::Volume;
 use rayon::prelude::*;
+use std::ops::Deref;
 use std::sync::Arc;
+
+/// An intensity volume the image-aware methods can compute with: made only
+/// by [`conditioned`], so a method given one knows it is finite and at a
+/// workable scale and never scans it again (one pass over a 512³ image
+/// takes 0.2 s). Cloning shares the voxels. `From<Arc<Volume<f32>>>`
+/// conditions, so a caller with a plain image passes it as it is.
+#[derive(Debug, Clone)]
+pub struct Conditioned(Arc<Volume<f32>>);
+
+impl Deref for Conditioned {
+    type Target = Volume<f32>;
+    fn deref(&self) -> &Volume<f32> {
+        &self.0
+    }
+}
+
+impl From<Arc<Volume<f32>>> for Conditioned {
+    fn from(image: Arc<Volume<f32>>) -> Conditioned {
+        conditioned(image)
+    }
+}
+
+impl From<Volume<f32>> for Conditioned {
+    fn from(image: Volume<f32>) -> Conditioned {
+        conditioned(Arc::new(image))
+    }
+}
 
 /// Spread of intensities (largest minus smallest) above which, or below
 /// [`MIN_SPREAD`], an image is mapped linearly onto `[0, SPREAD]` before
@@ -51,7 +79,7 @@ pub const SPREAD: f64 = 1000.0;
 /// pixels beside it. Why a linear map is safe: every statistic the methods
 /// read is a ratio of intensity differences, a rank or a histogram over
 /// the image's own range, so it changes what they decide only by rounding.
-pub fn conditioned(image: Arc<Volume<f32>>) -> Arc<Volume<f32>> {
+pub fn conditioned(image: Arc<Volume<f32>>) -> Conditioned {
     // One pass: the range of the finite values, and whether all are. The
     // values filled in are copies of finite ones (or their median), so the
     // range is that of the image once filled.
@@ -78,7 +106,7 @@ pub fn conditioned(image: Arc<Volume<f32>>) -> Arc<Volume<f32>> {
     let rescale = spread > 0.0
         && !((MIN_SPREAD..=MAX_SPREAD).contains(&spread) && magnitude <= MAX_OFFSET * spread);
     if all_finite && !rescale {
-        return image;
+        return Conditioned(image);
     }
     let mut out = (*image).clone();
     if !all_finite {
@@ -93,7 +121,7 @@ pub fn conditioned(image: Arc<Volume<f32>>) -> Arc<Volume<f32>> {
             .par_iter_mut()
             .for_each(|v| *v = ((f64::from(*v) - lo) / spread * SPREAD) as f32);
     }
-    Arc::new(out)
+    Conditioned(Arc::new(out))
 }
 
 /// Fill the non-finite values of `row` from their nearest finite one, or
@@ -175,9 +203,9 @@ mod tests {
     #[test]
     fn a_finite_image_is_kept_as_it_is() {
         let v = volume([2, 2, 1], vec![1.0, 2.0, 3.0, 4.0]);
-        assert!(Arc::ptr_eq(&conditioned(v.clone()), &v));
+        assert!(Arc::ptr_eq(&conditioned(v.clone()).0, &v));
         let flat = volume([2, 1, 1], vec![7.0, 7.0]);
-        assert!(Arc::ptr_eq(&conditioned(flat.clone()), &flat));
+        assert!(Arc::ptr_eq(&conditioned(flat.clone()).0, &flat));
     }
 
     #[test]

@@ -58,6 +58,7 @@ use crate::loo::{overlap, pooled_dice};
 use crate::sdf::signed_distance;
 use crate::slices::{Plane, assemble, median_gap, showing, shows_on, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
+pub use conditioned::Conditioned;
 use fuse::{Params, band, fuse, separate};
 use interslice_core::{AnyVolume, Axis, Mask, Volume};
 use model::{IntensityModel, blur};
@@ -382,7 +383,7 @@ type Case<'a> = (Vec<bool>, Vec<f32>, &'a [f32], f64);
 /// Image-guided interpolation on one intensity volume.
 #[derive(Debug, Clone)]
 pub struct ImageGuided {
-    image: Arc<Volume<f32>>,
+    image: Conditioned,
     /// Whether this runs on a compact stack of drawn slices
     /// ([`Interpolator::for_stack`]): leave-one-out does not try the random
     /// walk there ([`Plan::walk`]), as the stack holds no image between the
@@ -581,22 +582,12 @@ impl Plan {
 impl ImageGuided {
     /// The method on `image`; it must lie on the grid of the masks it is given
     /// (checked by [`Interpolator::interpolate`]). It reads `image`
-    /// [`conditioned`](conditioned::conditioned): finite, at a workable scale.
-    pub fn new(image: Arc<Volume<f32>>) -> ImageGuided {
-        ImageGuided::on_conditioned(conditioned::conditioned(image))
-    }
-
-    /// [`ImageGuided::new`] on an image already
-    /// [`conditioned`](conditioned::conditioned) (a server cell's shared
-    /// intensities), which is not scanned again: one pass over a 512³
-    /// image takes 0.2 s, on every interpolation the server runs.
-    pub fn on_conditioned(image: Arc<Volume<f32>>) -> ImageGuided {
-        debug_assert!(Arc::ptr_eq(
-            &conditioned::conditioned(image.clone()),
-            &image
-        ));
+    /// [`Conditioned`]: finite, at a workable scale (a plain image is
+    /// conditioned here; a server cell's shared intensities are not scanned
+    /// again).
+    pub fn new(image: impl Into<Conditioned>) -> ImageGuided {
         ImageGuided {
-            image,
+            image: image.into(),
             on_stack: false,
             planned: None,
         }
@@ -1003,7 +994,7 @@ fn decide_slices(
 impl ImageGuided {
     /// The walk of [`Plan::walk`], bounded by [`MAX_WALK_VOXELS`].
     fn walker(&self) -> RandomWalk {
-        RandomWalk::on_conditioned(self.image.clone(), MAX_WALK_VOXELS)
+        RandomWalk::within(self.image.clone(), MAX_WALK_VOXELS)
     }
 
     /// The random walk of [`Plan::walk`] on `input` (in the band of `prior`

@@ -23,11 +23,11 @@
 //! outside a band ([`RandomWalk::walk_with`]) and keeps its objects apart.
 use crate::crop::{extent, joint_extent};
 use crate::image::check_grid;
+use crate::image::conditioned::Conditioned;
 use crate::slices::{Plane, assemble};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Mask, Volume};
 use rayon::prelude::*;
-use std::sync::Arc;
 
 /// Pixels the box reaches past the drawn outlines in the plane.
 pub const MARGIN: usize = 8;
@@ -43,7 +43,7 @@ const MAX_ITER: usize = 500;
 /// The random walker seeded by the drawn slices, on one intensity volume.
 #[derive(Debug, Clone)]
 pub struct RandomWalk {
-    image: Arc<Volume<f32>>,
+    image: Conditioned,
     /// Most voxels of a box the walk solves on ([`RandomWalk::walk_with`]).
     max_voxels: usize,
 }
@@ -55,23 +55,19 @@ pub const BYTES_PER_VOXEL: usize = 24;
 impl RandomWalk {
     /// The method on `image` (on the grid of the masks it is given), on a
     /// box of any size (the benchmark's anchor).
-    pub fn new(image: Arc<Volume<f32>>) -> RandomWalk {
+    pub fn new(image: impl Into<Conditioned>) -> RandomWalk {
         RandomWalk::within(image, usize::MAX)
     }
 
     /// The walk that declines a box of more than `max_voxels` voxels
     /// ([`RandomWalk::walk_with`] gives `None`): what a caller bounds the
-    /// memory of an optional walk by. It reads `image`
-    /// [`conditioned`](super::conditioned::conditioned): finite, at a workable scale.
-    pub fn within(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
-        RandomWalk::on_conditioned(super::conditioned::conditioned(image), max_voxels)
-    }
-
-    /// [`RandomWalk::within`] on an image already
-    /// [`conditioned`](super::conditioned::conditioned) (the image-guided
-    /// method's own), which is not scanned again.
-    pub(super) fn on_conditioned(image: Arc<Volume<f32>>, max_voxels: usize) -> RandomWalk {
-        RandomWalk { image, max_voxels }
+    /// memory of an optional walk by. It reads `image` [`Conditioned`]:
+    /// finite, at a workable scale (a plain image is conditioned here).
+    pub fn within(image: impl Into<Conditioned>, max_voxels: usize) -> RandomWalk {
+        RandomWalk {
+            image: image.into(),
+            max_voxels,
+        }
     }
 }
 
@@ -433,6 +429,7 @@ pub(crate) fn undiluted(mut z: Vec<f32>, phi: &[f32]) -> Vec<f32> {
 mod tests {
     use super::*;
     use interslice_core::{Axis, Geometry};
+    use std::sync::Arc;
 
     /// A tilted slab of bright voxels whose boundary the walker must follow
     /// between drawn slices 6 apart: the shape changes little, the image

@@ -36,7 +36,7 @@ fn every_method_answers_cancelled_once_its_token_is() {
     cancel.cancel();
     let image = Arc::new(mask.map(|x| if x { 200.0f32 } else { 20.0 }));
     let mut all = methods();
-    all.push(by_name_with_image(None, Some(image)).unwrap());
+    all.push(by_name_with_image(None, Some(image.into())).unwrap());
     for m in all {
         let input = SparseMask::new(&mask, Axis::Z, &drawn).with_cancel(&cancel);
         assert!(

@@ -24,13 +24,13 @@
 //! the gaps instead of halving one gap after another.
 use super::write_text;
 use crate::error::ProjectError;
-use interslice_core::{Axis, LabelVolume, Volume};
+use interslice_core::{Axis, LabelVolume};
 use interslice_interp::advise::advise;
+use interslice_interp::image::Conditioned;
 use interslice_interp::protocol::{dice_on, sparse_of};
 use interslice_interp::{by_name_with_image, interpolate_labels};
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Arc;
 
 /// How the simulated tracer chooses the slices after the outermost two.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -99,7 +99,7 @@ pub struct Simulation<'a> {
     /// The interpolation method's name (default as for `interpolate`).
     pub method: Option<&'a str>,
     /// The intensity volume for the image-aware method.
-    pub image: Option<Arc<Volume<f32>>>,
+    pub image: Option<Conditioned>,
 }
 
 /// `budget` slices evenly spaced strictly between `first` and `last`, with
