@@ -5,7 +5,8 @@
 // through the nucleus on the x view; the export reproduces every traced slice
 // of both orientations and matches the phantom's nucleus. Before the x slice,
 // the uncertainty tint (U) shows on a skipped z slice and the line under the
-// method menu names the method leave-one-out recommended.
+// method menu names the method leave-one-out recommended. The tracing summary
+// and the advice report the same predicted Dice.
 import { after, before, test } from "node:test";
 import assert from "node:assert/strict";
 import fs from "node:fs";
@@ -110,6 +111,23 @@ test("trace the outermost slices, then follow the suggestion key three times", a
   assert.equal(sum.pending, 0);
   const advice = await page.getByTestId("advice").textContent();
   assert.match(advice, /predicted Dice 0\.\d{3}/);
+  // The summary reports the predicted Dice of the method the advice (and the
+  // preview) use: one figure for one tracing, once both have caught up.
+  const agreed = await page.waitForFunction(
+    (n) => {
+      const dice = (id) =>
+        document.querySelector(`[data-testid="${id}"]`)?.textContent?.match(/predicted Dice (0\.\d{3})/)?.[1];
+      const s = document.querySelector('[data-testid="tracing-summary"]')?.textContent ?? "";
+      return s.startsWith(`${n} traced slices`) &&
+        dice("advice") !== undefined &&
+        dice("tracing-summary") === dice("advice")
+        ? dice("advice")
+        : false;
+    },
+    traced.length,
+    { timeout: 30000 },
+  );
+  assert.match(await agreed.jsonValue(), /^0\.\d{3}$/);
 });
 
 /** Pixels of view `axis` that the warm uncertainty tint (orange over grey) could be. */

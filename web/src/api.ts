@@ -273,8 +273,9 @@ export class Api {
     return this.json("POST", `/api/cells/${enc(id)}/time`, { seconds }, keepalive);
   }
   /** GET the signed-in user's tracing summary of a label on a cell. */
-  summary(id: string, label: number): Promise<TracingSummary> {
-    return this.json("GET", `/api/cells/${enc(id)}/summary?label=${label}`);
+  summary(id: string, label: number, method?: string): Promise<TracingSummary> {
+    const m = method ? `&method=${enc(method)}` : "";
+    return this.json("GET", `/api/cells/${enc(id)}/summary?label=${label}${m}`);
   }
   /** GET /api/labels */
   labels(): Promise<Label[]> {

@@ -1,6 +1,9 @@
 /**
  * The tracing summary of the side panel: slices traced, time spent and the
- * predicted Dice of the label being traced (`GET /api/cells/{cell}/summary`).
+ * predicted Dice of the label being traced (`GET /api/cells/{cell}/summary`),
+ * for the method the preview and the advice use (the one picked, else the
+ * one leave-one-out recommended): the advice reports the same figure, so the
+ * panel never shows two predicted Dice for one tracing.
  * It is refreshed a moment after the last saved change (debounced: a burst of
  * strokes asks once), one request at a time; a change during a request asks
  * for one more when it ends, as the preview does.
@@ -35,6 +38,7 @@ export class SummaryPanel {
     private api: Api,
     private cellId: string,
     private label: () => number,
+    private method: () => string,
     private el: HTMLElement,
   ) {}
 
@@ -57,7 +61,7 @@ export class SummaryPanel {
     this.busy = true;
     const label = this.label();
     try {
-      const s = await this.api.summary(this.cellId, label);
+      const s = await this.api.summary(this.cellId, label, this.method() || undefined);
       if (!this.disposed && label === this.label()) this.el.textContent = formatSummary(s);
     } catch (e) {
       if (!this.disposed) this.el.textContent = `summary: ${(e as Error).message}`;

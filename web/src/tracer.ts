@@ -73,6 +73,8 @@ export class Tracer {
   private tracings: Tracings;
   private previews: Previews;
   private advisor: Advisor;
+  /** The method in use the advice and the summary were last asked for. */
+  private methodAsked = "";
   private doneWhen = loadDoneWhen(localStorage);
   private tracingSummary: SummaryPanel;
   private time: TimeTracker;
@@ -159,7 +161,13 @@ export class Tracer {
     });
     this.el = this.buildPage();
     this.root = this.el.root;
-    this.tracingSummary = new SummaryPanel(api, cell.id, () => this.st.label, this.el.summary);
+    this.tracingSummary = new SummaryPanel(
+      api,
+      cell.id,
+      () => this.st.label,
+      () => this.methodInUse,
+      this.el.summary,
+    );
     this.panel3d = new Panel3D(
       this.el,
       () => this.surfaces(),
@@ -198,6 +206,7 @@ export class Tracer {
           this.saveState();
           this.showMethodNote();
           this.previews.schedule();
+          this.methodMayHaveChanged();
         },
         setUncertainty: (on) => this.setUncertainty(on),
         setBrightness: (v) => {
@@ -626,6 +635,21 @@ export class Tracer {
     this.el.volume.textContent = `${this.labelOf(label).name}: ${fmtNum(r.volume)} ${r.unit} (${r.method})`;
     this.showMethodNote();
     this.paintAll();
+    this.methodMayHaveChanged();
+  }
+
+  /**
+   * Ask the advice and the summary again when the method in use is no
+   * longer the one they were last asked for (another method picked, or the
+   * preview's leave-one-out recommending another): both report the
+   * predicted Dice of that method.
+   */
+  private methodMayHaveChanged(): void {
+    const m = this.methodInUse;
+    if (m === this.methodAsked) return;
+    this.methodAsked = m;
+    this.advisor.refresh();
+    void this.tracingSummary.refresh();
   }
 
   /** Which method the preview of the current label used and why (with "recommended" chosen). */
