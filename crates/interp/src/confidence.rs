@@ -76,6 +76,29 @@ fn ended_confidence(input: &SparseMask<'_>, s: usize, scale: f32) -> Option<Vec<
     )
 }
 
+/// The scale `c` of `scales` with the least log-loss of `σ(c z)` against
+/// the truth over the `(logit, truth)` slices (a one-parameter Platt
+/// scaling); the first scale when no slice is given.
+pub fn best_scale<'a>(
+    scales: &[f32],
+    slices: impl Iterator<Item = (&'a Vec<f32>, &'a Vec<bool>)> + Clone,
+) -> f32 {
+    let mut best = (f64::INFINITY, scales[0]);
+    for &c in scales {
+        let mut loss = 0.0f64;
+        for (z, truth) in slices.clone() {
+            for (&zi, &t) in z.iter().zip(truth.iter()) {
+                let p = f64::from(sigmoid(c * zi)).clamp(1e-6, 1.0 - 1e-6);
+                loss -= if t { p.ln() } else { (1.0 - p).ln() };
+            }
+        }
+        if loss < best.0 {
+            best = (loss, c);
+        }
+    }
+    best.1
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

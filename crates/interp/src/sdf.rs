@@ -90,6 +90,20 @@ impl SdfCache {
         Ok(SdfCache { maps })
     }
 
+    /// `run` on `input` with its drawn slices' maps, computed here once
+    /// unless the caller passed them: for a method whose stages (leave-one-out
+    /// runs, then the final one) read the same drawn slices.
+    pub fn sharing<T>(
+        input: SparseMask<'_>,
+        run: impl FnOnce(SparseMask<'_>) -> Result<T, InterpError>,
+    ) -> Result<T, InterpError> {
+        if input.maps.is_some() {
+            return run(input);
+        }
+        let cache = SdfCache::of_drawn(&input)?;
+        run(input.with_maps(&cache))
+    }
+
     /// The map of `mask`, from the cache when it holds it.
     pub fn signed_distance(cache: Option<&SdfCache>, mask: &[bool], plane: &Plane) -> Map {
         cache

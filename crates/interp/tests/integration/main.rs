@@ -7,6 +7,7 @@
 //! took 346–398 crate-seconds of a cold build, these four 295.
 mod cancel;
 mod common;
+mod confidence;
 mod image;
 mod image_data;
 mod invariants;
