@@ -74,7 +74,17 @@ pub fn interpolate_labels_with_confidence(
     drawn: &[usize],
 ) -> Result<(LabelVolume, Volume<f32>), InterpError> {
     let planes = DrawnLabels::read_any(sparse, axis, drawn)?;
-    let (labels, conf) = run(method, &planes, true, |l| l)?;
+    interpolate_drawn_with_confidence_as(method, &planes, |l| l)
+}
+
+/// [`interpolate_labels_with_confidence`] from drawn slices already read,
+/// painting `value(label)` ([`interpolate_drawn_as`]).
+pub fn interpolate_drawn_with_confidence_as<T: Voxel>(
+    method: &dyn Interpolator,
+    planes: &DrawnLabels,
+    value: impl Fn(u16) -> T,
+) -> Result<(Volume<T>, Volume<f32>), InterpError> {
+    let (labels, conf) = run(method, planes, true, value)?;
     Ok((labels, conf.expect("confidence requested")))
 }
 
@@ -101,60 +111,71 @@ fn run<T: Voxel>(
         )));
     }
     let labels = &planes.labels;
-    let results: Vec<LabelResult> = (0..labels.len())
-        .into_par_iter()
-        .map(|li| {
-            let filled = planes.traced(li);
-            if !confidence {
-                let slices: Vec<DrawnSlice<'_>> = drawn
-                    .iter()
-                    .zip(&filled)
-                    .enumerate()
-                    .map(|(i, (&index, inside))| DrawnSlice {
-                        index,
-                        inside,
-                        extent: planes.extent(i, li),
-                    })
-                    .collect();
-                for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
-                    if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
-                        return Ok((Piece::Boxed(b, m), None));
-                    }
-                }
-            }
-            let m = planes.on_grid(&filled);
-            let input = SparseMask::new(&m, axis, drawn);
-            if confidence {
-                let (mask, c) = method.interpolate_with_confidence(input)?;
-                Ok((Piece::Whole(mask), Some(c)))
-            } else {
-                Ok((Piece::Whole(method.interpolate(input)?), None))
-            }
-        })
-        .collect();
     let mut out: Volume<T> = zeros_in_parallel(geometry.clone());
     let mut conf: Option<Volume<f32>> =
         confidence.then(|| Volume::filled(geometry.clone(), 1.0f32));
-    for (&l, r) in labels.iter().zip(results) {
-        let (piece, c) = r?;
-        let v = value(l);
-        match piece {
-            Piece::Boxed(b, m) => b.paint(&mut out, &m, v),
-            Piece::Whole(m) => out
-                .data_mut()
-                .par_iter_mut()
-                .zip(m.data().par_iter())
-                .for_each(|(o, &inside)| {
-                    if inside {
-                        *o = v;
+    // With the confidence every label's result is a whole volume of
+    // masks and floats (5 bytes a voxel, 640 MiB at 512³): as many labels
+    // at a time as there are cores, not all of them at once.
+    let batch = if confidence {
+        rayon::current_num_threads().max(1)
+    } else {
+        labels.len().max(1)
+    };
+    for first in (0..labels.len()).step_by(batch) {
+        let last = (first + batch).min(labels.len());
+        let results: Vec<LabelResult> = (first..last)
+            .into_par_iter()
+            .map(|li| {
+                let filled = planes.traced(li);
+                if !confidence {
+                    let slices: Vec<DrawnSlice<'_>> = drawn
+                        .iter()
+                        .zip(&filled)
+                        .enumerate()
+                        .map(|(i, (&index, inside))| DrawnSlice {
+                            index,
+                            inside,
+                            extent: planes.extent(i, li),
+                        })
+                        .collect();
+                    for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
+                        if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
+                            return Ok((Piece::Boxed(b, m), None));
+                        }
                     }
-                }),
-        }
-        if let (Some(all), Some(c)) = (conf.as_mut(), c) {
-            all.data_mut()
-                .par_iter_mut()
-                .zip(c.data().par_iter())
-                .for_each(|(a, &x)| *a = a.min(x));
+                }
+                let m = planes.on_grid(&filled);
+                let input = SparseMask::new(&m, axis, drawn);
+                if confidence {
+                    let (mask, c) = method.interpolate_with_confidence(input)?;
+                    Ok((Piece::Whole(mask), Some(c)))
+                } else {
+                    Ok((Piece::Whole(method.interpolate(input)?), None))
+                }
+            })
+            .collect();
+        for (&l, r) in labels[first..last].iter().zip(results) {
+            let (piece, c) = r?;
+            let v = value(l);
+            match piece {
+                Piece::Boxed(b, m) => b.paint(&mut out, &m, v),
+                Piece::Whole(m) => out
+                    .data_mut()
+                    .par_iter_mut()
+                    .zip(m.data().par_iter())
+                    .for_each(|(o, &inside)| {
+                        if inside {
+                            *o = v;
+                        }
+                    }),
+            }
+            if let (Some(all), Some(c)) = (conf.as_mut(), c) {
+                all.data_mut()
+                    .par_iter_mut()
+                    .zip(c.data().par_iter())
+                    .for_each(|(a, &x)| *a = a.min(x));
+            }
         }
     }
     Ok((out, conf))
