@@ -1,6 +1,6 @@
 """The README's napari screenshot: the phantom cell, its nucleus painted on
-every 5th z slice and interpolated by the dock widget, evaluated against
-the truth. Renders offscreen (napari's `viewer.screenshot`):
+every 5th z slice and interpolated by the dock widget with its uncertainty
+shown (red), evaluated against the truth. Renders offscreen (napari's `viewer.screenshot`):
 
     QT_QPA_PLATFORM=offscreen xvfb-run -a python python/examples/napari_screenshot.py docs/screenshots/napari.png
 """
@@ -26,6 +26,7 @@ def main(out):
     widget = InterpolateWidget(viewer)
     viewer.window.add_dock_widget(widget, name="Interpolate & evaluate (interslice)", area="right")
     widget.labels_combo.value = tracing
+    widget.uncertainty_check.value = True
     widget.interpolate()
     widget.gt_combo.value = viewer.layers["nucleus truth"]
     widget.seg_combo.value = tracing

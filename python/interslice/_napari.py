@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from magicgui.widgets import ComboBox, Container, Label, PushButton, Table
+from magicgui.widgets import CheckBox, ComboBox, Container, Label, PushButton, Table
 
 import interslice
 
@@ -80,8 +80,12 @@ class InterpolateWidget(Container):
     axis, press *Interpolate painted slices*: the slices in between are
     filled by interslice (every label on its own), the painted slices are
     left as they are. Paint more slices (or correct an interpolated one)
-    and press again: every slice you changed counts as painted. *Evaluate*
-    measures a segmentation layer against a ground-truth layer.
+    and press again: every slice you changed counts as painted. With *show
+    uncertainty*, an Image layer "<labels> uncertainty" tints, in red over
+    the image, where the method is least sure of the label it gave
+    (``1 - confidence``: 0 where it is sure, 0.5 where it guesses), the
+    places worth checking or painting. *Evaluate* measures a segmentation
+    layer against a ground-truth layer.
     """
 
     def __init__(self, napari_viewer):
@@ -94,6 +98,8 @@ class InterpolateWidget(Container):
         self.labels_combo = ComboBox(label="labels", choices=self._labels_layers)
         self.image_combo = ComboBox(label="image", choices=self._image_layers, nullable=True, value=None)
         self.method_combo = ComboBox(label="method", choices=method_choices, value=None)
+        # Off by default: the confidence costs a second pass per label.
+        self.uncertainty_check = CheckBox(text="show uncertainty", value=False)
         self.run_button = PushButton(text="Interpolate painted slices")
         self.status_label = Label(value="")
         self.suggestion_label = Label(value="")
@@ -108,6 +114,7 @@ class InterpolateWidget(Container):
                 self.labels_combo,
                 self.image_combo,
                 self.method_combo,
+                self.uncertainty_check,
                 self.run_button,
                 self.status_label,
                 self.suggestion_label,
@@ -189,7 +196,7 @@ class InterpolateWidget(Container):
                 raise interslice.Error(f"image and labels differ: shape {img.shape} vs {data.shape}")
             img = img.T
         spacing = tuple(float(s) for s in reversed(layer.scale[-3:]))
-        out = interslice.interpolate(
+        result = interslice.interpolate(
             sparse.T,
             drawn=drawn_list,
             axis=2 - axis,
@@ -198,7 +205,13 @@ class InterpolateWidget(Container):
             method=self.method_combo.value,
             # A Labels layer holds labels, not intensities: every one counts.
             max_labels=ALL_LABELS,
-        ).T
+            confidence=self.uncertainty_check.value,
+        )
+        if self.uncertainty_check.value:
+            out, confidence = result[0].T, result[1].T
+            self._show_uncertainty(layer, confidence)
+        else:
+            out = result.T
         undrawn = [i for i in range(n) if i not in drawn]
         if undrawn:
             # Only the slices nobody painted change.
@@ -208,6 +221,26 @@ class InterpolateWidget(Container):
         self._state[id(layer)] = _Painted(axis, drawn, np.array(data, copy=True))
         self._say(f"interpolated {len(undrawn)} slices from {len(drawn_list)} painted along axis {axis}")
         self._suggest(layer, sparse, drawn_list, axis, spacing, img)
+
+    def _show_uncertainty(self, layer, confidence: np.ndarray) -> None:
+        """Add (or update) the Image layer tinting where `layer`'s
+        interpolation is least sure: ``1 - confidence``, red, added over
+        what is below it."""
+        name = f"{layer.name} uncertainty"
+        data = 1.0 - confidence
+        if name in self._viewer.layers:
+            shown = self._viewer.layers[name]
+            shown.data = data
+        else:
+            self._viewer.add_image(
+                data,
+                name=name,
+                scale=layer.scale,
+                translate=layer.translate,
+                colormap="red",
+                blending="additive",
+                contrast_limits=(0.0, 0.5),
+            )
 
     def _suggest(self, layer, sparse, drawn, axis, spacing, img) -> None:
         """Show the next slice worth painting, when interslice can advise."""
@@ -258,4 +291,5 @@ class InterpolateWidget(Container):
             "index": [name for name, _ in METRIC_ROWS],
             "columns": [name for name, _ in cols],
         }
-        self._say(f"{seg.name} against {gt.name}: {len(r['labels'])} labels")
+        n = len(r["labels"])
+        self._say(f"{seg.name} against {gt.name}: {n} label{'' if n == 1 else 's'}")

@@ -1,7 +1,7 @@
 """Typed signatures of the Rust extension (docstrings: ``help(interslice.X)``)."""
 
 import os
-from typing import Any, Literal, Sequence, TypedDict
+from typing import Any, Literal, Sequence, TypedDict, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -50,6 +50,7 @@ def overlap(
 def staple(
     masks: Sequence[npt.NDArray[Any]], label: int | None = None, max_iterations: int = 10000
 ) -> tuple[npt.NDArray[np.uint8], dict[str, Any]]: ...
+@overload
 def interpolate(
     labels: npt.NDArray[Any],
     drawn: Sequence[int] | None = None,
@@ -58,7 +59,20 @@ def interpolate(
     image: npt.NDArray[Any] | None = None,
     method: str | None = None,
     max_labels: int = 255,
+    confidence: Literal[False] = False,
 ) -> npt.NDArray[Any]: ...
+@overload
+def interpolate(
+    labels: npt.NDArray[Any],
+    drawn: Sequence[int] | None = None,
+    axis: Axis | None = None,
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    image: npt.NDArray[Any] | None = None,
+    method: str | None = None,
+    max_labels: int = 255,
+    *,
+    confidence: Literal[True],
+) -> tuple[npt.NDArray[Any], npt.NDArray[np.float32]]: ...
 def methods() -> list[MethodInfo]: ...
 def advise(
     labels: npt.NDArray[Any],

@@ -8,7 +8,9 @@ use crate::volumes::geometry;
 use crate::{error, parse_axis};
 use interslice_core::{Axis, LengthUnit, Volume, Voxel};
 use interslice_interp::image::Conditioned;
-use interslice_interp::labels::{DEFAULT_MAX_LABELS, DrawnLabels, interpolate_drawn_as};
+use interslice_interp::labels::{
+    DEFAULT_MAX_LABELS, DrawnLabels, interpolate_drawn_as, interpolate_drawn_with_confidence_as,
+};
 use interslice_interp::{DEFAULT_METHOD, Interpolator, by_name_with_image};
 use numpy::{Element, PyReadonlyArray3};
 use pyo3::prelude::*;
@@ -29,10 +31,15 @@ use pyo3::types::PyDict;
 /// `max_labels` labels on the drawn slices is an error (each label is
 /// interpolated on its own: an intensity array passed as labels would run
 /// for minutes). Returns a new Fortran-ordered array of the input's
-/// dtype; the drawn slices are reproduced exactly. The GIL is released
-/// while the interpolation runs.
+/// dtype; the drawn slices are reproduced exactly. With `confidence`,
+/// returns `(labels, confidence)`: the second a float32 array of the same
+/// shape, how sure the method is of each voxel's label, in `[0.5, 1]`
+/// (1 on drawn slices and wherever the method is sure, 0.5 on a boundary
+/// it is guessing; the least of any label there): what `interslice
+/// interpolate --confidence` writes. The GIL is released while the
+/// interpolation runs.
 #[pyfunction]
-#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, max_labels=DEFAULT_MAX_LABELS))]
+#[pyo3(signature = (labels, drawn=None, axis=None, spacing=vec![1.0, 1.0, 1.0], image=None, method=None, max_labels=DEFAULT_MAX_LABELS, confidence=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn interpolate<'py>(
     py: Python<'py>,
@@ -43,12 +50,17 @@ pub fn interpolate<'py>(
     image: Option<&Bound<'py, PyAny>>,
     method: Option<&str>,
     max_labels: usize,
+    confidence: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let a = any_array(labels, "labels")?;
     let dims = a.shape();
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
     t.check_labels(max_labels)?;
-    with_array!(&a, x => interpolated_like(py, x, &t, dims))
+    if confidence {
+        with_array!(&a, x => interpolated_with_confidence_like(py, x, &t, dims))
+    } else {
+        with_array!(&a, x => interpolated_like(py, x, &t, dims))
+    }
 }
 
 /// The interpolation of `t` painted straight into an array of the element
@@ -67,6 +79,25 @@ fn interpolated_like<'py, T: Element + FromLabel + Voxel>(
         })
         .map_err(error)?;
     Ok(to_numpy(py, out.into_parts().1, dims)?.into_any())
+}
+
+/// [`interpolated_like`] with the confidence per voxel, as a tuple.
+fn interpolated_with_confidence_like<'py, T: Element + FromLabel + Voxel>(
+    py: Python<'py>,
+    _like: &PyReadonlyArray3<'_, T>,
+    t: &Tracing,
+    dims: [usize; 3],
+) -> PyResult<Bound<'py, PyAny>> {
+    let (out, conf) = py
+        .detach(|| {
+            interpolate_drawn_with_confidence_as(t.method.as_ref(), &t.planes, |l| {
+                T::from_label(l).unwrap_or_default()
+            })
+        })
+        .map_err(error)?;
+    let labels = to_numpy(py, out.into_parts().1, dims)?;
+    let conf = to_numpy(py, conf.into_parts().1, dims)?;
+    Ok((labels, conf).into_pyobject(py)?.into_any())
 }
 
 /// Which undrawn slices to trace next, as `interslice advise --json` prints

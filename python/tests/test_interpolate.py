@@ -80,6 +80,31 @@ def test_interpolate_with_the_image_equals_the_cli(tmp_path, cli, phantom_files)
     np.testing.assert_array_equal(again, want)
 
 
+@pytest.mark.parametrize("with_image", [False, True])
+def test_confidence_equals_the_cli(tmp_path, cli, phantom_files, with_image):
+    f = phantom_files
+    out, conf = tmp_path / "out.nii.gz", tmp_path / "conf.nii.gz"
+    args = ["interpolate", f["sparse"], "--drawn", f["drawn"], "--out", out, "--confidence", conf]
+    sparse, meta = interslice.read(f["sparse"])
+    image = None
+    if with_image:
+        args += ["--image", f["image"]]
+        image, _ = interslice.read(f["image"])
+    cli(*args)
+    d = drawn_list(f["drawn"])
+    got, got_conf = interslice.interpolate(sparse, drawn=d, spacing=meta["spacing"], image=image, confidence=True)
+    np.testing.assert_array_equal(got, interslice.read(out)[0])
+    assert got_conf.dtype == np.float32 and got_conf.shape == sparse.shape
+    np.testing.assert_array_equal(got_conf, interslice.read(conf)[0])
+    # Sure on the drawn slices, guessing somewhere between them, never below a coin toss.
+    assert np.all(got_conf[:, :, d] == 1.0)
+    assert got_conf.min() >= 0.5 and got_conf.min() < 0.75
+    # Without confidence the labels are the same.
+    np.testing.assert_array_equal(
+        got, interslice.interpolate(sparse, drawn=d, spacing=meta["spacing"], image=image)
+    )
+
+
 def test_advise_equals_the_cli(cli, phantom_files):
     f = phantom_files
     want = json.loads(cli("advise", f["sparse"], "--drawn", f["drawn"], "--count", 4, "--json").stdout)

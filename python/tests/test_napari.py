@@ -1,7 +1,7 @@
 """The napari dock widget, headless (Qt offscreen): a nucleus painted on
 every 5th slice is interpolated to Dice > 0.95 against the truth, the
-painted slices stay as painted, the next slice worth painting is shown, and
-the metrics table is filled."""
+painted slices stay as painted, the next slice worth painting is shown, the
+uncertainty layer marks where it is wrong, and the metrics table is filled."""
 
 import numpy as np
 import pytest
@@ -57,6 +57,22 @@ def test_widget_interpolates_painted_slices(make_napari_viewer):
     widget.interpolate()
     np.testing.assert_array_equal(np.asarray(painted.data)[z], truth[z])
     np.testing.assert_array_equal(np.asarray(painted.data)[zs], before[zs])
+
+    # With uncertainty shown, a red layer marks where the interpolation may
+    # be wrong: nothing on painted slices, and far more where it is wrong.
+    widget.uncertainty_check.value = True
+    widget.interpolate()
+    assert [layer.name for layer in viewer.layers].count("tracing uncertainty") == 1
+    unsure = np.asarray(viewer.layers["tracing uncertainty"].data)
+    assert unsure.shape == truth.shape
+    assert np.all(unsure[zs] == 0) and np.all(unsure[z] == 0)
+    assert 0.25 < unsure.max() <= 0.5
+    wrong = (np.asarray(painted.data) != 0) != (truth != 0)
+    assert wrong.any()
+    assert unsure[wrong].mean() > 20 * unsure[~wrong].mean(), (unsure[wrong].mean(), unsure[~wrong].mean())
+    # Interpolating again updates the layer instead of adding another.
+    widget.interpolate()
+    assert [layer.name for layer in viewer.layers].count("tracing uncertainty") == 1
 
     widget.gt_combo.value = viewer.layers["nucleus truth"]
     widget.seg_combo.value = painted
