@@ -25,7 +25,8 @@
 //! [`InterpError::OutsideBox`], and the runner tries a larger box, then the
 //! whole volume. A result that reaches the box's in-plane sides (where the
 //! volume goes on) is computed again as well. Tests compare both ways.
-use crate::slices::centroid;
+use crate::image::fuse::tau;
+use crate::slices::{Plane, centroid};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
@@ -47,6 +48,14 @@ pub enum BoxReach {
     /// between consecutive drawn slices ([`drift`]).
     Drift,
 }
+
+/// The confidence taken as 1 outside a label's box
+/// ([`LabelBox::grown_for_confidence`]): the whole volume's confidence there
+/// lies between this and 1.
+pub const SURE: f32 = 0.9999;
+
+/// Just above the logit of [`SURE`], `ln(SURE / (1 − SURE))` = 9.2102.
+const SURE_LOGIT: f64 = 9.22;
 
 /// Drawn slices kept beyond the first and last drawn slice that show the
 /// label: the cubic slopes of `shape-cubic` and `shape-aligned` read one
@@ -301,12 +310,84 @@ impl LabelBox {
         Ok((!self.reaches_open_side(&r, axis, geometry.dims)).then_some(r))
     }
 
-    /// Set `value` in `out` wherever the box's `mask` is inside, plane by
-    /// plane (across the box's last dimension) in parallel.
+    /// The box grown in-plane far enough for a shape method's confidence
+    /// ([`crate::confidence::shape_confidence`]) on the slices `drawn`
+    /// (along `axis`, in the whole volume) to reach [`SURE`] at its sides:
+    /// `σ(c |φ| / τ(δ))` with `c ≥ 1` reaches it `SURE_LOGIT · τ(δ)` from
+    /// the result's boundary or a drawn outline, all of which lie inside
+    /// the box, and `δ` is at most the widest gap less one slice. Outside
+    /// the grown box the confidence is taken as 1. `None` when the grown
+    /// box is the whole volume.
+    pub fn grown_for_confidence(
+        &self,
+        geometry: &Geometry,
+        axis: Axis,
+        drawn: &[usize],
+    ) -> Option<LabelBox> {
+        let (a, b) = axis.in_plane();
+        let plane = Plane {
+            width: geometry.dims[a],
+            height: geometry.dims[b],
+            spacing: [geometry.spacing[a], geometry.spacing[b]],
+            slice_spacing: geometry.spacing[axis.dim()],
+        };
+        let widest = drawn.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(1);
+        let reach = SURE_LOGIT * f64::from(tau(&plane, (widest - 1) as f64));
+        let pixel = plane.spacing[0].min(plane.spacing[1]);
+        let extra = (reach / pixel).ceil() as usize;
+        let mut grown = *self;
+        for d in [a, b] {
+            let hi = (self.lo[d] + self.dims[d] + extra).min(geometry.dims[d]);
+            grown.lo[d] = self.lo[d].saturating_sub(extra);
+            grown.dims[d] = hi - grown.lo[d];
+        }
+        (grown.dims != geometry.dims).then_some(grown)
+    }
+
+    /// [`LabelBox::interpolate`] with the method's confidence on the box.
+    pub fn interpolate_with_confidence(
+        &self,
+        method: &dyn Interpolator,
+        geometry: &Geometry,
+        axis: Axis,
+        slices: &[DrawnSlice<'_>],
+    ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
+        let (m, drawn) = self.sparse(geometry, axis, slices)?;
+        let (r, c) = match method
+            .interpolate_with_confidence(SparseMask::new(&m, axis, &drawn).inside_box())
+        {
+            Err(InterpError::OutsideBox) => return Ok(None),
+            r => r?,
+        };
+        Ok((!self.reaches_open_side(&r, axis, geometry.dims)).then_some((r, c)))
+    }
+
+    /// Lower `out` to the box's confidence `conf` where it is less (a
+    /// voxel's confidence is the least of any label's there).
+    pub fn lower(&self, out: &mut Volume<f32>, conf: &Volume<f32>) {
+        self.rows_into(out, conf.data(), |o, row| {
+            for (o, &c) in o.iter_mut().zip(row) {
+                *o = o.min(c);
+            }
+        });
+    }
+
+    /// Set `value` in `out` wherever the box's `mask` is inside.
     pub fn paint<T: Voxel>(&self, out: &mut Volume<T>, mask: &Mask, value: T) {
+        self.rows_into(out, mask.data(), |o, row| paint_row(o, row, value));
+    }
+
+    /// `write(out_row, box_row)` for every row of the box (`src`, the
+    /// box's values) and the row of `out` it lies on, plane by plane
+    /// (across the box's last dimension) in parallel.
+    fn rows_into<T: Voxel, S: Sync>(
+        &self,
+        out: &mut Volume<T>,
+        src: &[S],
+        write: impl Fn(&mut [T], &[S]) + Sync,
+    ) {
         let [gx, gy, _] = out.dims();
         let [nx, ny, nz] = self.dims;
-        let src = mask.data();
         let planes = &mut out.data_mut()[gx * gy * self.lo[2]..gx * gy * (self.lo[2] + nz)];
         planes
             .par_chunks_mut(gx * gy)
@@ -314,7 +395,7 @@ impl LabelBox {
             .for_each(|(plane, box_plane)| {
                 for (j, row) in box_plane.chunks(nx).enumerate() {
                     let start = self.lo[0] + gx * (self.lo[1] + j);
-                    paint_row(&mut plane[start..start + nx], row, value);
+                    write(&mut plane[start..start + nx], row);
                 }
             });
     }

@@ -67,6 +67,10 @@ pub fn interpolate_drawn_as<T: Voxel>(
 /// [`interpolate_labels`] with the confidence per voxel: the least
 /// confidence of any label there (each label's from
 /// [`Interpolator::interpolate_with_confidence`]), 1 where no label is unsure.
+/// A shape method runs on the label's box grown until its confidence
+/// reaches [`crate::crop::SURE`] at the sides
+/// ([`LabelBox::grown_for_confidence`]); outside, where the whole volume's
+/// confidence lies between that and 1, it is 1.
 pub fn interpolate_labels_with_confidence(
     method: &dyn Interpolator,
     sparse: &LabelVolume,
@@ -88,14 +92,15 @@ pub fn interpolate_drawn_with_confidence_as<T: Voxel>(
     Ok((labels, conf.expect("confidence requested")))
 }
 
-/// A label's result: on its box ([`crate::crop`]) or on the whole volume.
+/// A label's result, with its confidence when asked: on its box
+/// ([`crate::crop`]) or on the whole volume.
 enum Piece {
-    Boxed(LabelBox, Mask),
-    Whole(Mask),
+    Boxed(LabelBox, Mask, Option<Volume<f32>>),
+    Whole(Mask, Option<Volume<f32>>),
 }
 
-/// A label's result and, when asked, its confidence.
-type LabelResult = Result<(Piece, Option<Volume<f32>>), InterpError>;
+/// A label's result.
+type LabelResult = Result<Piece, InterpError>;
 
 fn run<T: Voxel>(
     method: &dyn Interpolator,
@@ -128,53 +133,70 @@ fn run<T: Voxel>(
             .into_par_iter()
             .map(|li| {
                 let filled = planes.traced(li);
-                if !confidence {
-                    let slices: Vec<DrawnSlice<'_>> = drawn
-                        .iter()
-                        .zip(&filled)
-                        .enumerate()
-                        .map(|(i, (&index, inside))| DrawnSlice {
-                            index,
-                            inside,
-                            extent: planes.extent(i, li),
-                        })
-                        .collect();
-                    for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
+                let slices: Vec<DrawnSlice<'_>> = drawn
+                    .iter()
+                    .zip(&filled)
+                    .enumerate()
+                    .map(|(i, (&index, inside))| DrawnSlice {
+                        index,
+                        inside,
+                        extent: planes.extent(i, li),
+                    })
+                    .collect();
+                for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
+                    if !confidence {
                         if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
-                            return Ok((Piece::Boxed(b, m), None));
+                            return Ok(Piece::Boxed(b, m, None));
                         }
+                        continue;
+                    }
+                    // The confidence reaches further than the result: a
+                    // larger box, or the whole volume.
+                    let Some(b) = b.grown_for_confidence(geometry, axis, drawn) else {
+                        break;
+                    };
+
+                    if let Some((m, c)) =
+                        b.interpolate_with_confidence(method, geometry, axis, &slices)?
+                    {
+                        return Ok(Piece::Boxed(b, m, Some(c)));
                     }
                 }
                 let m = planes.on_grid(&filled);
                 let input = SparseMask::new(&m, axis, drawn);
                 if confidence {
                     let (mask, c) = method.interpolate_with_confidence(input)?;
-                    Ok((Piece::Whole(mask), Some(c)))
+                    Ok(Piece::Whole(mask, Some(c)))
                 } else {
-                    Ok((Piece::Whole(method.interpolate(input)?), None))
+                    Ok(Piece::Whole(method.interpolate(input)?, None))
                 }
             })
             .collect();
         for (&l, r) in labels[first..last].iter().zip(results) {
-            let (piece, c) = r?;
             let v = value(l);
-            match piece {
-                Piece::Boxed(b, m) => b.paint(&mut out, &m, v),
-                Piece::Whole(m) => out
-                    .data_mut()
-                    .par_iter_mut()
-                    .zip(m.data().par_iter())
-                    .for_each(|(o, &inside)| {
-                        if inside {
-                            *o = v;
-                        }
-                    }),
-            }
-            if let (Some(all), Some(c)) = (conf.as_mut(), c) {
-                all.data_mut()
-                    .par_iter_mut()
-                    .zip(c.data().par_iter())
-                    .for_each(|(a, &x)| *a = a.min(x));
+            match r? {
+                Piece::Boxed(b, m, c) => {
+                    b.paint(&mut out, &m, v);
+                    if let (Some(all), Some(c)) = (conf.as_mut(), c) {
+                        b.lower(all, &c);
+                    }
+                }
+                Piece::Whole(m, c) => {
+                    out.data_mut()
+                        .par_iter_mut()
+                        .zip(m.data().par_iter())
+                        .for_each(|(o, &inside)| {
+                            if inside {
+                                *o = v;
+                            }
+                        });
+                    if let (Some(all), Some(c)) = (conf.as_mut(), c) {
+                        all.data_mut()
+                            .par_iter_mut()
+                            .zip(c.data().par_iter())
+                            .for_each(|(a, &x)| *a = a.min(x));
+                    }
+                }
             }
         }
     }

@@ -2,10 +2,13 @@
 //! on random blobs, random drawn slices, any axis and anisotropic spacing;
 //! and the multi-label contract of `interpolate_labels`.
 use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
+use interslice_interp::crop::SURE;
 use interslice_interp::{
-    BoxReach, InterpError, Interpolator, SparseMask, interpolate_labels, methods,
+    BoxReach, InterpError, Interpolator, SparseMask, interpolate_labels,
+    interpolate_labels_with_confidence, methods,
 };
 use proptest::prelude::*;
+use std::sync::Mutex;
 
 /// Up to three random ellipsoids in a small anisotropic volume.
 fn blobs() -> impl Strategy<Value = Mask> {
@@ -84,6 +87,119 @@ impl Interpolator for Unboxed {
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         self.0.interpolate(input)
     }
+    fn interpolate_with_confidence(
+        &self,
+        input: SparseMask<'_>,
+    ) -> Result<(Mask, Volume<f32>), InterpError> {
+        self.0.interpolate_with_confidence(input)
+    }
+}
+
+/// A method as it is, recording the dims of every volume it is run on.
+struct Recorded<'a>(&'a dyn Interpolator, Mutex<Vec<[usize; 3]>>);
+
+impl Interpolator for Recorded<'_> {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn description(&self) -> &'static str {
+        self.0.description()
+    }
+    fn box_reach(&self) -> BoxReach {
+        self.0.box_reach()
+    }
+    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        self.1.lock().unwrap().push(input.mask.dims());
+        self.0.interpolate(input)
+    }
+    fn interpolate_with_confidence(
+        &self,
+        input: SparseMask<'_>,
+    ) -> Result<(Mask, Volume<f32>), InterpError> {
+        self.1.lock().unwrap().push(input.mask.dims());
+        self.0.interpolate_with_confidence(input)
+    }
+}
+
+/// Small random ellipsoids in a wide volume (96 x 88 pixels, 24 slices
+/// along z, anisotropic): a label's box, grown for its confidence, is
+/// smaller than the volume.
+fn small_blobs() -> impl Strategy<Value = Mask> {
+    let ell = (
+        30.0f64..66.0,
+        30.0f64..58.0,
+        4.0f64..20.0,
+        2.0f64..6.0,
+        2.0f64..6.0,
+        2.0f64..8.0,
+    );
+    (prop::collection::vec(ell, 1..3), 0.5f64..1.5).prop_map(|(es, sz)| {
+        let dims = [96, 88, 24];
+        let g = Geometry::new(dims, [1.0, 0.9, sz], LengthUnit::Micrometre).unwrap();
+        let mut m: Mask = Volume::zeros(g);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                for i in 0..dims[0] {
+                    let inside = es.iter().any(|e| {
+                        ((i as f64 - e.0) / e.3).powi(2)
+                            + ((j as f64 - e.1) / e.4).powi(2)
+                            + ((k as f64 - e.2) / e.5).powi(2)
+                            <= 1.0
+                    });
+                    m.set(i, j, k, inside);
+                }
+            }
+        }
+        m
+    })
+}
+
+/// Every `step`-th slice of `full` along z from `first`, as a sparse label
+/// volume (label 3), with the drawn slices.
+fn traced_along_z(full: &Mask, first: usize, step: usize) -> (LabelVolume, Vec<usize>) {
+    let drawn: Vec<usize> = (first..full.slice_count(Axis::Z)).step_by(step).collect();
+    let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
+    for &d in &drawn {
+        let s: Vec<u16> = full
+            .slice(Axis::Z, d)
+            .unwrap()
+            .iter()
+            .map(|&b| u16::from(b) * 3)
+            .collect();
+        sparse.set_slice(Axis::Z, d, &s).unwrap();
+    }
+    (sparse, drawn)
+}
+
+/// Labels and confidence of `m` on its box and on the whole volume: the
+/// same labels, and the same confidence but where the whole volume's is at
+/// least [`SURE`] (the box takes it as 1 outside).
+fn box_matches_whole_with_confidence(
+    m: &dyn Interpolator,
+    sparse: &LabelVolume,
+    drawn: &[usize],
+) -> Result<Vec<[usize; 3]>, TestCaseError> {
+    let recorded = Recorded(m, Mutex::new(Vec::new()));
+    let (boxed, c_boxed) =
+        interpolate_labels_with_confidence(&recorded, sparse, Axis::Z, drawn).unwrap();
+    let (whole, c_whole) = interpolate_labels_with_confidence(
+        &Unboxed(interslice_interp::by_name(m.name()).unwrap()),
+        sparse,
+        Axis::Z,
+        drawn,
+    )
+    .unwrap();
+    prop_assert!(boxed == whole, "{} labels differ on its box", m.name());
+    for (&b, &w) in c_boxed.data().iter().zip(c_whole.data()) {
+        prop_assert!(
+            b == w || (b == 1.0 && w >= SURE),
+            "{}: confidence {} on the box, {} on the whole volume",
+            m.name(),
+            b,
+            w
+        );
+    }
+    Ok(recorded.1.into_inner().unwrap())
 }
 
 proptest! {
@@ -115,6 +231,53 @@ proptest! {
             prop_assert!(boxed == whole, "{} differs on its box along {}", name, axis);
         }
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// With the confidence, the label runner runs a shape method on the
+    /// label's box grown until the confidence reaches `SURE` at its sides
+    /// (`LabelBox::grown_for_confidence`): the labels must be the whole
+    /// volume's voxel for voxel, the confidence too but where the whole
+    /// volume's is at least `SURE` and the box's is 1.
+    #[test]
+    fn a_label_box_gives_the_whole_volume_confidence(
+        full in small_blobs(),
+        first in 0usize..3,
+        step in 2usize..5,
+    ) {
+        let (sparse, drawn) = traced_along_z(&full, first, step);
+        prop_assume!(drawn.len() >= 2);
+        for m in methods().into_iter().filter(|m| m.box_reach() != BoxReach::Whole) {
+            box_matches_whole_with_confidence(m.as_ref(), &sparse, &drawn)?;
+        }
+    }
+}
+
+/// The grown box is used where it is smaller than the volume: a ball of
+/// radius 5 traced every 3rd slice runs the default on a box, and gives the
+/// whole volume's labels and confidence.
+#[test]
+fn a_small_label_with_its_confidence_runs_on_its_box() {
+    let g = Geometry::new([96, 88, 24], [1.0, 1.0, 1.0], LengthUnit::Micrometre).unwrap();
+    let mut full: Mask = Volume::zeros(g);
+    for k in 0..24 {
+        for j in 0..88 {
+            for i in 0..96 {
+                let r2 = (i as f64 - 48.0).powi(2)
+                    + (j as f64 - 44.0).powi(2)
+                    + (k as f64 - 12.0).powi(2);
+                full.set(i, j, k, r2 <= 25.0);
+            }
+        }
+    }
+    let (sparse, drawn) = traced_along_z(&full, 1, 3);
+    let m = interslice_interp::by_name(interslice_interp::DEFAULT_METHOD).unwrap();
+    let runs = box_matches_whole_with_confidence(m.as_ref(), &sparse, &drawn).unwrap();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    // In-plane: the ball (11 pixels), a margin and the confidence's reach.
+    assert!(runs[0][0] < 96 && runs[0][1] < 88, "{runs:?}");
 }
 
 #[test]
