@@ -56,44 +56,29 @@ pub fn interpolate<'py>(
     let dims = a.shape();
     let t = Tracing::of(py, &a, drawn, axis, spacing, image, method)?;
     t.check_labels(max_labels)?;
-    if confidence {
-        with_array!(&a, x => interpolated_with_confidence_like(py, x, &t, dims))
-    } else {
-        with_array!(&a, x => interpolated_like(py, x, &t, dims))
-    }
+    with_array!(&a, x => interpolated_like(py, x, &t, dims, confidence))
 }
 
 /// The interpolation of `t` painted straight into an array of the element
-/// type of `_like` (every label fits: they come from that array).
+/// type of `_like` (every label fits: they come from that array); with
+/// `confidence`, a tuple of it and the confidence per voxel.
 fn interpolated_like<'py, T: Element + FromLabel + Voxel>(
     py: Python<'py>,
     _like: &PyReadonlyArray3<'_, T>,
     t: &Tracing,
     dims: [usize; 3],
+    confidence: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let out = py
-        .detach(|| {
-            interpolate_drawn_as(t.method.as_ref(), &t.planes, |l| {
-                T::from_label(l).unwrap_or_default()
-            })
-        })
-        .map_err(error)?;
-    Ok(to_numpy(py, out.into_parts().1, dims)?.into_any())
-}
-
-/// [`interpolated_like`] with the confidence per voxel, as a tuple.
-fn interpolated_with_confidence_like<'py, T: Element + FromLabel + Voxel>(
-    py: Python<'py>,
-    _like: &PyReadonlyArray3<'_, T>,
-    t: &Tracing,
-    dims: [usize; 3],
-) -> PyResult<Bound<'py, PyAny>> {
+    let method = t.method.as_ref();
+    let value = |l| T::from_label(l).unwrap_or_default();
+    if !confidence {
+        let out = py
+            .detach(|| interpolate_drawn_as(method, &t.planes, value))
+            .map_err(error)?;
+        return Ok(to_numpy(py, out.into_parts().1, dims)?.into_any());
+    }
     let (out, conf) = py
-        .detach(|| {
-            interpolate_drawn_with_confidence_as(t.method.as_ref(), &t.planes, |l| {
-                T::from_label(l).unwrap_or_default()
-            })
-        })
+        .detach(|| interpolate_drawn_with_confidence_as(method, &t.planes, value))
         .map_err(error)?;
     let labels = to_numpy(py, out.into_parts().1, dims)?;
     let conf = to_numpy(py, conf.into_parts().1, dims)?;

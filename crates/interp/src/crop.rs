@@ -302,12 +302,42 @@ impl LabelBox {
         axis: Axis,
         slices: &[DrawnSlice<'_>],
     ) -> Result<Option<Mask>, InterpError> {
+        self.run(geometry, axis, slices, |i| method.interpolate(i), |m| m)
+    }
+
+    /// [`LabelBox::interpolate`] with the method's confidence on the box.
+    pub fn interpolate_with_confidence(
+        &self,
+        method: &dyn Interpolator,
+        geometry: &Geometry,
+        axis: Axis,
+        slices: &[DrawnSlice<'_>],
+    ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
+        self.run(
+            geometry,
+            axis,
+            slices,
+            |i| method.interpolate_with_confidence(i),
+            |(m, _)| m,
+        )
+    }
+
+    /// `call` on the box's input; `None` as [`LabelBox::interpolate`] says,
+    /// judged on the result's `mask`.
+    fn run<R>(
+        &self,
+        geometry: &Geometry,
+        axis: Axis,
+        slices: &[DrawnSlice<'_>],
+        call: impl FnOnce(SparseMask<'_>) -> Result<R, InterpError>,
+        mask: impl Fn(&R) -> &Mask,
+    ) -> Result<Option<R>, InterpError> {
         let (m, drawn) = self.sparse(geometry, axis, slices)?;
-        let r = match method.interpolate(SparseMask::new(&m, axis, &drawn).inside_box()) {
+        let r = match call(SparseMask::new(&m, axis, &drawn).inside_box()) {
             Err(InterpError::OutsideBox) => return Ok(None),
             r => r?,
         };
-        Ok((!self.reaches_open_side(&r, axis, geometry.dims)).then_some(r))
+        Ok((!self.reaches_open_side(mask(&r), axis, geometry.dims)).then_some(r))
     }
 
     /// The box grown in-plane far enough for a shape method's confidence
@@ -325,12 +355,7 @@ impl LabelBox {
         drawn: &[usize],
     ) -> Option<LabelBox> {
         let (a, b) = axis.in_plane();
-        let plane = Plane {
-            width: geometry.dims[a],
-            height: geometry.dims[b],
-            spacing: [geometry.spacing[a], geometry.spacing[b]],
-            slice_spacing: geometry.spacing[axis.dim()],
-        };
+        let plane = Plane::along(geometry, axis);
         let widest = drawn.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(1);
         let reach = SURE_LOGIT * f64::from(tau(&plane, (widest - 1) as f64));
         let pixel = plane.spacing[0].min(plane.spacing[1]);
@@ -342,24 +367,6 @@ impl LabelBox {
             grown.dims[d] = hi - grown.lo[d];
         }
         (grown.dims != geometry.dims).then_some(grown)
-    }
-
-    /// [`LabelBox::interpolate`] with the method's confidence on the box.
-    pub fn interpolate_with_confidence(
-        &self,
-        method: &dyn Interpolator,
-        geometry: &Geometry,
-        axis: Axis,
-        slices: &[DrawnSlice<'_>],
-    ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
-        let (m, drawn) = self.sparse(geometry, axis, slices)?;
-        let (r, c) = match method
-            .interpolate_with_confidence(SparseMask::new(&m, axis, &drawn).inside_box())
-        {
-            Err(InterpError::OutsideBox) => return Ok(None),
-            r => r?,
-        };
-        Ok((!self.reaches_open_side(&r, axis, geometry.dims)).then_some((r, c)))
     }
 
     /// Lower `out` to the box's confidence `conf` where it is less (a

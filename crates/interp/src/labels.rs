@@ -155,7 +155,6 @@ fn run<T: Voxel>(
                     let Some(b) = b.grown_for_confidence(geometry, axis, drawn) else {
                         break;
                     };
-
                     if let Some((m, c)) =
                         b.interpolate_with_confidence(method, geometry, axis, &slices)?
                     {

@@ -2,7 +2,7 @@
 //! and assembling a volume from per-slice results without holding the volume
 //! twice along the fast axis.
 use crate::{InterpError, SparseMask};
-use interslice_core::{Axis, Mask, Volume};
+use interslice_core::{Axis, Geometry, Mask, Volume};
 use rayon::prelude::*;
 
 /// The in-slice shape `(width, height)` and physical spacing `[su, sv]` of
@@ -22,13 +22,17 @@ pub struct Plane {
 impl Plane {
     /// The plane of slices along `input.axis`.
     pub fn of(input: &SparseMask<'_>) -> Plane {
-        let (a, b) = input.axis.in_plane();
-        let g = input.mask.geometry();
+        Plane::along(input.mask.geometry(), input.axis)
+    }
+
+    /// The plane of slices of a volume of `geometry` along `axis`.
+    pub fn along(geometry: &Geometry, axis: Axis) -> Plane {
+        let (a, b) = axis.in_plane();
         Plane {
-            width: g.dims[a],
-            height: g.dims[b],
-            spacing: [g.spacing[a], g.spacing[b]],
-            slice_spacing: g.spacing[input.axis.dim()],
+            width: geometry.dims[a],
+            height: geometry.dims[b],
+            spacing: [geometry.spacing[a], geometry.spacing[b]],
+            slice_spacing: geometry.spacing[axis.dim()],
         }
     }
 

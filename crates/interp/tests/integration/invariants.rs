@@ -154,21 +154,27 @@ fn small_blobs() -> impl Strategy<Value = Mask> {
     })
 }
 
-/// Every `step`-th slice of `full` along z from `first`, as a sparse label
-/// volume (label 3), with the drawn slices.
-fn traced_along_z(full: &Mask, first: usize, step: usize) -> (LabelVolume, Vec<usize>) {
-    let drawn: Vec<usize> = (first..full.slice_count(Axis::Z)).step_by(step).collect();
+/// The `drawn` slices of `full` along `axis` as a sparse label volume
+/// (label 3).
+fn traced(full: &Mask, axis: Axis, drawn: &[usize]) -> LabelVolume {
     let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
-    for &d in &drawn {
+    for &d in drawn {
         let s: Vec<u16> = full
-            .slice(Axis::Z, d)
+            .slice(axis, d)
             .unwrap()
             .iter()
             .map(|&b| u16::from(b) * 3)
             .collect();
-        sparse.set_slice(Axis::Z, d, &s).unwrap();
+        sparse.set_slice(axis, d, &s).unwrap();
     }
-    (sparse, drawn)
+    sparse
+}
+
+/// Every `step`-th slice of `full` along z from `first`, traced, with the
+/// drawn slices.
+fn traced_along_z(full: &Mask, first: usize, step: usize) -> (LabelVolume, Vec<usize>) {
+    let drawn: Vec<usize> = (first..full.slice_count(Axis::Z)).step_by(step).collect();
+    (traced(full, Axis::Z, &drawn), drawn)
 }
 
 /// Labels and confidence of `m` on its box and on the whole volume: the
@@ -219,11 +225,7 @@ proptest! {
         let n = full.slice_count(axis);
         let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
         prop_assume!(drawn.len() >= 2);
-        let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
-        for &d in &drawn {
-            let s: Vec<u16> = full.slice(axis, d).unwrap().iter().map(|&b| u16::from(b) * 3).collect();
-            sparse.set_slice(axis, d, &s).unwrap();
-        }
+        let sparse = traced(&full, axis, &drawn);
         for m in methods().into_iter().filter(|m| m.box_reach() != BoxReach::Whole) {
             let boxed = interpolate_labels(m.as_ref(), &sparse, axis, &drawn).unwrap();
             let name = m.name();
