@@ -25,7 +25,8 @@
 //! [`InterpError::OutsideBox`], and the runner tries a larger box, then the
 //! whole volume. A result that reaches the box's in-plane sides (where the
 //! volume goes on) is computed again as well. Tests compare both ways.
-use crate::image::fuse::tau;
+use crate::image::fuse::{band, tau};
+use crate::image::walk;
 use crate::slices::{Plane, centroid};
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
@@ -47,6 +48,43 @@ pub enum BoxReach {
     /// the box grows by three times the largest step of an outline's box
     /// between consecutive drawn slices ([`drift`]).
     Drift,
+    /// A shape prior that follows drift ([`BoxReach::Drift`]) and the
+    /// intensities around it: the image-aware method, whose fusion reads
+    /// the image in a band around the prior and whose walk reads it
+    /// [`crate::image::walk::MARGIN`] past the drawn outlines
+    /// (`image_margin`). It runs on the box's part of the image
+    /// ([`crate::Interpolator::for_box`]).
+    Image,
+}
+
+impl BoxReach {
+    /// Whether the confidence of a method that reads this far can run on a
+    /// box grown by [`LabelBox::grown_for_confidence`], whose reach is that
+    /// of the shape methods' confidence. The image-aware method's
+    /// confidence is fitted per label (its scale, and the walk's, which
+    /// never reaches 1) after the box is chosen: it runs on the whole
+    /// volume.
+    pub fn confidence_on_box(self) -> bool {
+        matches!(self, BoxReach::Outline | BoxReach::Drift)
+    }
+}
+
+/// Pixels the image-aware method reads past its shape prior
+/// ([`BoxReach::Image`]): the fusion's band at the middle of the widest gap
+/// between the drawn `slices` ([`crate::image::fuse::band`], at most 40
+/// pixels), and two more, the neighbour the band's smoothing reads and the
+/// pixel the blur reads beside that; or the walk's margin past the drawn
+/// outlines, whichever is more; plus one.
+fn image_margin(geometry: &Geometry, axis: Axis, slices: &[DrawnSlice<'_>]) -> usize {
+    let plane = Plane::along(geometry, axis);
+    let widest = slices
+        .windows(2)
+        .map(|w| w[1].index - w[0].index)
+        .max()
+        .unwrap_or(1);
+    let b = f64::from(band(&plane, widest as f64 / 2.0));
+    let px = plane.spacing[0].min(plane.spacing[1]);
+    ((b / px).ceil() as usize + 2).max(walk::MARGIN) + 1
 }
 
 /// The confidence taken as 1 outside a label's box
@@ -169,24 +207,30 @@ impl LabelBox {
     /// times the largest step of any side of the outlines' extent ([`drift`]),
     /// is tried before the whole volume.
     pub fn tries(
-        dims: [usize; 3],
+        geometry: &Geometry,
         axis: Axis,
         slices: &[DrawnSlice<'_>],
         reach: BoxReach,
     ) -> Vec<LabelBox> {
+        let dims = geometry.dims;
         let extents: Vec<Option<[usize; 4]>> = slices.iter().map(|s| s.extent).collect();
+        let drifting = || {
+            let w = dims[axis.in_plane().0];
+            let moved = MARGIN + 3 + 3 * centroid_drift(slices, w);
+            let sides = MARGIN + 3 * drift(&extents);
+            if sides > moved {
+                vec![moved, sides]
+            } else {
+                vec![moved]
+            }
+        };
         let margins = match reach {
             BoxReach::Whole => return Vec::new(),
             BoxReach::Outline => vec![MARGIN],
-            BoxReach::Drift => {
-                let w = dims[axis.in_plane().0];
-                let moved = MARGIN + 3 + 3 * centroid_drift(slices, w);
-                let sides = MARGIN + 3 * drift(&extents);
-                if sides > moved {
-                    vec![moved, sides]
-                } else {
-                    vec![moved]
-                }
+            BoxReach::Drift => drifting(),
+            BoxReach::Image => {
+                let extra = image_margin(geometry, axis, slices);
+                drifting().into_iter().map(|m| m + extra).collect()
             }
         };
         margins
@@ -302,7 +346,14 @@ impl LabelBox {
         axis: Axis,
         slices: &[DrawnSlice<'_>],
     ) -> Result<Option<Mask>, InterpError> {
-        self.run(geometry, axis, slices, |i| method.interpolate(i), |m| m)
+        self.run(
+            method,
+            geometry,
+            axis,
+            slices,
+            |m, i| m.interpolate(i),
+            |m| m,
+        )
     }
 
     /// [`LabelBox::interpolate`] with the method's confidence on the box.
@@ -314,10 +365,11 @@ impl LabelBox {
         slices: &[DrawnSlice<'_>],
     ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
         self.run(
+            method,
             geometry,
             axis,
             slices,
-            |i| method.interpolate_with_confidence(i),
+            |m, i| m.interpolate_with_confidence(i),
             |(m, _)| m,
         )
     }
@@ -326,14 +378,17 @@ impl LabelBox {
     /// judged on the result's `mask`.
     fn run<R>(
         &self,
+        method: &dyn Interpolator,
         geometry: &Geometry,
         axis: Axis,
         slices: &[DrawnSlice<'_>],
-        call: impl FnOnce(SparseMask<'_>) -> Result<R, InterpError>,
+        call: impl FnOnce(&dyn Interpolator, SparseMask<'_>) -> Result<R, InterpError>,
         mask: impl Fn(&R) -> &Mask,
     ) -> Result<Option<R>, InterpError> {
         let (m, drawn) = self.sparse(geometry, axis, slices)?;
-        let r = match call(SparseMask::new(&m, axis, &drawn).inside_box()) {
+        let cut = method.for_box(self);
+        let method = cut.as_deref().unwrap_or(method);
+        let r = match call(method, SparseMask::new(&m, axis, &drawn).inside_box()) {
             Err(InterpError::OutsideBox) => return Ok(None),
             r => r?,
         };
@@ -367,6 +422,28 @@ impl LabelBox {
             grown.dims[d] = hi - grown.lo[d];
         }
         (grown.dims != geometry.dims).then_some(grown)
+    }
+
+    /// The box's part of `volume` (its geometry's origin left as is, as in
+    /// [`LabelBox::sparse`]).
+    pub fn cut<T: Voxel>(&self, volume: &Volume<T>) -> Volume<T> {
+        let [gx, gy, _] = volume.dims();
+        let [nx, ny, nz] = self.dims;
+        let src = volume.data();
+        let data: Vec<T> = (0..nz)
+            .into_par_iter()
+            .flat_map_iter(|k| {
+                (0..ny).flat_map(move |j| {
+                    let start = self.lo[0] + gx * (self.lo[1] + j + gy * (self.lo[2] + k));
+                    src[start..start + nx].iter().copied()
+                })
+            })
+            .collect();
+        let geometry = Geometry {
+            dims: self.dims,
+            ..volume.geometry().clone()
+        };
+        Volume::from_vec(geometry, data).expect("one value per voxel of the box")
     }
 
     /// Lower `out` to the box's confidence `conf` where it is less (a
@@ -429,6 +506,7 @@ mod tests {
     fn the_box_holds_the_outlines_a_margin_and_two_more_drawn_slices() {
         // 20 x 10 slices along z; a 3 x 2 outline at (5..8, 4..6) on z = 6, 9.
         let dims = [20, 10, 30];
+        let g = Geometry::new(dims, [1.0; 3], Default::default()).unwrap();
         let mut on = vec![false; 200];
         for v in 4..6 {
             for u in 5..8 {
@@ -446,11 +524,11 @@ mod tests {
             at(15, &off),
             at(18, &off),
         ];
-        let b = LabelBox::tries(dims, Axis::Z, &slices, BoxReach::Outline);
+        let b = LabelBox::tries(&g, Axis::Z, &slices, BoxReach::Outline);
         assert_eq!(b.len(), 1);
         assert_eq!(b[0].lo, [3, 2, 0]);
         assert_eq!(b[0].dims, [3 + 2 * MARGIN, 2 + 2 * MARGIN, 16]);
-        assert_eq!(LabelBox::tries(dims, Axis::Z, &slices, BoxReach::Whole), []);
+        assert_eq!(LabelBox::tries(&g, Axis::Z, &slices, BoxReach::Whole), []);
         // The outline moves one pixel right on z = 9: a drift of 1.
         let mut moved = vec![false; 200];
         for v in 4..6 {
@@ -460,7 +538,7 @@ mod tests {
         }
         let mut drifting = slices;
         drifting[3] = at(9, &moved);
-        let d = LabelBox::tries(dims, Axis::Z, &drifting, BoxReach::Drift);
+        let d = LabelBox::tries(&g, Axis::Z, &drifting, BoxReach::Drift);
         // The centroid moves by 1/2 (rounded up to 1): a margin of
         // MARGIN + 3 + 3 = 8 around u 5..=8, v 4..=5, cut at the volume's
         // sides (v runs 0..10); the sides' step of 1 asks for less, so there
@@ -470,17 +548,12 @@ mod tests {
         assert_eq!(d[0].dims, [8 + 8 + 1, 10, 16]);
         // Nothing drawn: no box; a box as large as the volume: none either.
         assert_eq!(
-            LabelBox::tries(
-                dims,
-                Axis::Z,
-                &[at(0, &off), at(5, &off)],
-                BoxReach::Outline
-            ),
+            LabelBox::tries(&g, Axis::Z, &[at(0, &off), at(5, &off)], BoxReach::Outline),
             []
         );
         let all = vec![true; 200];
         assert_eq!(
-            LabelBox::tries(dims, Axis::Z, &[at(0, &all), at(29, &all)], BoxReach::Drift),
+            LabelBox::tries(&g, Axis::Z, &[at(0, &all), at(29, &all)], BoxReach::Drift),
             []
         );
     }

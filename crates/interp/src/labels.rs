@@ -143,7 +143,8 @@ fn run<T: Voxel>(
                         extent: planes.extent(i, li),
                     })
                     .collect();
-                for b in LabelBox::tries(geometry.dims, axis, &slices, method.box_reach()) {
+                let reach = method.box_reach();
+                for b in LabelBox::tries(geometry, axis, &slices, reach) {
                     if !confidence {
                         if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
                             return Ok(Piece::Boxed(b, m, None));
@@ -152,7 +153,11 @@ fn run<T: Voxel>(
                     }
                     // The confidence reaches further than the result: a
                     // larger box, or the whole volume.
-                    let Some(b) = b.grown_for_confidence(geometry, axis, drawn) else {
+                    let grown = reach
+                        .confidence_on_box()
+                        .then(|| b.grown_for_confidence(geometry, axis, drawn))
+                        .flatten();
+                    let Some(b) = grown else {
                         break;
                     };
                     if let Some((m, c)) =

@@ -1,5 +1,6 @@
 //! The interpolator trait shared by every method.
 pub use crate::crop::BoxReach;
+use crate::crop::LabelBox;
 use crate::sdf::SdfCache;
 use interslice_core::mesh::TriMesh;
 use interslice_core::{Axis, Cancel, Mask, Volume};
@@ -138,6 +139,14 @@ pub trait Interpolator: Send + Sync {
     /// and mesh methods keep the default, [`BoxReach::Whole`].
     fn box_reach(&self) -> BoxReach {
         BoxReach::Whole
+    }
+    /// The same method on the part `b` of the volume (a label's box,
+    /// [`crate::crop`]): `None` for the methods that read nothing but the
+    /// mask, used as they are; the image-aware method cuts its image to the
+    /// box.
+    fn for_box(&self, b: &LabelBox) -> Option<Box<dyn Interpolator>> {
+        let _ = b;
+        None
     }
     /// The same method for a compact stack of the slices `real` along `axis`
     /// (leave-one-out predicts a drawn slice from such a stack,

@@ -11,6 +11,7 @@
 //! underflows the squared intensity steps the fusion's smoothing weighs
 //! edges by: the same ball scored 0.993 and 0.997 there, and offset by
 //! 1e7, where `f32` rounds the steps between neighbours, 0.996.
+use crate::crop::LabelBox;
 use interslice_core::Volume;
 use rayon::prelude::*;
 use std::ops::Deref;
@@ -28,6 +29,15 @@ impl Deref for Conditioned {
     type Target = Volume<f32>;
     fn deref(&self) -> &Volume<f32> {
         &self.0
+    }
+}
+
+impl Conditioned {
+    /// The part of the image in box `b`, conditioned as the whole image is
+    /// (its values are the image's, not scanned or mapped again): a label
+    /// run on its box reads the intensities the whole volume's run reads.
+    pub fn cut(&self, b: &LabelBox) -> Conditioned {
+        Conditioned(Arc::new(b.cut(&self.0)))
     }
 }
 

@@ -53,9 +53,10 @@ pub mod walk;
 
 use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill};
 use crate::confidence::{best_scale, shape_confidence, sigmoid};
+use crate::crop::{BoxReach, LabelBox};
 use crate::jump::jumping_gaps;
 use crate::loo::{overlap, pooled_dice};
-use crate::sdf::signed_distance;
+use crate::sdf::{FAR, signed_distance};
 use crate::slices::{Plane, assemble, median_gap, showing, shows_on, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
 pub use conditioned::Conditioned;
@@ -487,14 +488,20 @@ impl Plan {
     fn fit_fusion(&mut self, cases: &[Case<'_>], predicted: &[&[bool]], plane: &Plane) {
         let plane = *plane;
         // The prior's typical boundary error: the mean distance of its wrong
-        // pixels from its boundary.
+        // pixels from its boundary; where the prior lost the object (no
+        // boundary on the slice), their depth inside the truth, how far
+        // the boundary moved past them as the object shrank to nothing.
         let (sum, cnt) = cases
             .iter()
             .map(|(truth, phi, ..)| {
+                let lost = phi.first().is_some_and(|&d| d == FAR);
+                let depth = lost.then(|| signed_distance(truth, &plane));
                 phi.iter()
                     .zip(truth)
-                    .filter(|(d, t)| (**d < 0.0) != **t)
-                    .fold((0.0f64, 0u64), |a, (d, _)| {
+                    .enumerate()
+                    .filter(|(_, (d, t))| (**d < 0.0) != **t)
+                    .fold((0.0f64, 0u64), |a, (i, (d, _))| {
+                        let d = depth.as_ref().map_or(*d, |depth| depth[i]);
                         (a.0 + f64::from(d.abs()), a.1 + 1)
                     })
             })
@@ -540,7 +547,7 @@ impl Plan {
                     .map(|(truth, _, img, delta)| {
                         let d = (delta / 2.0).max(1.0);
                         let t = (plan_tau.tau(d), d);
-                        let phi = signed_distance(truth, &plane);
+                        let phi = prior_distance(truth, &plane);
                         overlap(&fuse(&phi, img, model, &plane, t, p).0, truth)
                     })
                     .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
@@ -721,7 +728,7 @@ impl ImageGuided {
             .map(|h| {
                 (
                     compact.truth(h.pos),
-                    signed_distance(&h.predicted, &plane),
+                    prior_distance(&h.predicted, &plane),
                     image_of(h.pos),
                     compact.reach(h.pos) as f64,
                 )
@@ -781,6 +788,7 @@ impl ImageGuided {
         }
         let mut held_input = SparseMask::new(&sparse, input.axis, &kept);
         held_input.cancel = input.cancel;
+        held_input.in_box = input.in_box;
         let prior = fill(plan.prior, held_input, false)?;
         let flat = IntensityModel::flat();
         let model = plan.model.as_ref().unwrap_or(&flat);
@@ -1056,6 +1064,18 @@ impl Interpolator for ImageGuided {
         Ok(self.run(&input, false)?.0)
     }
 
+    fn box_reach(&self) -> BoxReach {
+        BoxReach::Image
+    }
+
+    fn for_box(&self, b: &LabelBox) -> Option<Box<dyn Interpolator>> {
+        Some(Box::new(ImageGuided {
+            image: self.image.cut(b),
+            on_stack: self.on_stack,
+            planned: None,
+        }))
+    }
+
     fn interpolate_with_confidence(
         &self,
         input: SparseMask<'_>,
@@ -1123,6 +1143,21 @@ fn cross_cases<'a>(
             (case, copy)
         })
         .unzip()
+}
+
+/// The signed distance of a prior's slice `mask` (negative inside), or
+/// "no object near" ([`FAR`]) everywhere where it is empty: not the
+/// slice's diagonal, as [`signed_distance`] gives, so that a label's box
+/// ([`crate::crop`]) fits and fuses as the whole volume does. A held-out
+/// slice the prior lost counted the slice's size in the prior's error
+/// ([`Plan::tau`]): the same tracing was fitted with `τ` 24.9 µm on an
+/// 80 × 72 slice and 11.5 µm on its 35 × 31 box.
+fn prior_distance(mask: &[bool], plane: &Plane) -> Vec<f32> {
+    if mask.iter().any(|&x| x) {
+        signed_distance(mask, plane)
+    } else {
+        vec![FAR; mask.len()]
+    }
 }
 
 /// Seeds for the walk of [`Plan::walk`] on skipped slice `s` of `input`

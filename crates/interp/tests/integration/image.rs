@@ -3,18 +3,18 @@
 //! the image would bridge, gains on the noisy phantom, and the fallback to the
 //! shape where the image is noise.
 use interslice_core::phantom::{PhantomParams, generate};
-use interslice_core::{Axis, Mask, Volume};
+use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
 use interslice_interp::image::{EDGE_SEPARATION, ImageGuided, Walk, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, dice_on, drawn_for_skip, score, sparse_of};
 use interslice_interp::slices::shows_on;
-use interslice_interp::{Interpolator, SparseMask};
+use interslice_interp::{Interpolator, SparseMask, interpolate_labels};
 use proptest::prelude::*;
 use std::sync::Arc;
 
 use crate::common;
-use common::{in_ellipsoid, shape};
+use common::{Unboxed, in_ellipsoid, shape};
 
 /// Deterministic noise in [-1, 1] (SplitMix64 of the index).
 fn noise(i: u64) -> f32 {
@@ -681,4 +681,82 @@ fn holes_in_a_float_image_cost_the_image_guided_method_nothing() {
         h >= c - 0.005,
         "with holes {h:.4} against the clean image's {c:.4}"
     );
+}
+
+/// An ellipsoid of [`small_labelled_blobs`]: centre (pixels), radii
+/// (pixels), and the shear that moves it along x between slices.
+type Blob = (f64, f64, f64, f64, f64, f64, f64);
+
+fn blob() -> impl Strategy<Value = Blob> {
+    (
+        14.0f64..66.0,
+        14.0f64..58.0,
+        4.0f64..20.0,
+        2.5f64..7.0,
+        2.5f64..7.0,
+        2.0f64..8.0,
+        -0.5f64..0.5,
+    )
+}
+
+/// Labels 1 and 2 painted from the `blobs` (alternately), small in a wide
+/// volume (80 × 72 pixels, 24 slices along z, slices `sz` apart), sheared
+/// so that they drift between slices; and an image that shows them
+/// (bright, plus a ramp) under noise of amplitude `amp`.
+fn small_labelled_blobs(blobs: &[Blob], sz: f64, amp: f32) -> (LabelVolume, Arc<Volume<f32>>) {
+    let dims = [80, 72, 24];
+    let g = Geometry::new(dims, [1.0, 0.9, sz], LengthUnit::Micrometre).unwrap();
+    let mut labels: LabelVolume = Volume::zeros(g.clone());
+    let mut image: Volume<f32> = Volume::zeros(g);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let hit = blobs.iter().position(|e| {
+                    ((i as f64 - e.0 - e.6 * (k as f64 - 12.0)) / e.3).powi(2)
+                        + ((j as f64 - e.1) / e.4).powi(2)
+                        + ((k as f64 - e.2) / e.5).powi(2)
+                        <= 1.0
+                });
+                let label = hit.map_or(0, |p| 1 + (p % 2) as u16);
+                labels.set(i, j, k, label);
+                let at = (i + 80 * (j + 72 * k)) as u64;
+                let bright = if label > 0 { 100.0 } else { 20.0 };
+                image.set(i, j, k, bright + 0.3 * i as f32 + amp * noise(at));
+            }
+        }
+    }
+    (labels, Arc::new(image))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+    /// The label runner runs the image-guided method on each label's box
+    /// and the box's part of the image (`crop::BoxReach::Image`): the labels
+    /// must be the whole volume's voxel for voxel, whatever the blobs, the
+    /// axis, the drawn slices and the noise (the fusion, the band walk and
+    /// the whole-box walk all reach the box's margin).
+    #[test]
+    fn the_image_guided_method_on_a_label_box_gives_the_whole_volume_result(
+        blobs in prop::collection::vec(blob(), 1..4),
+        sz in 0.5f64..2.0,
+        amp in prop::sample::select(vec![0.0f32, 15.0, 60.0]),
+        axis in prop::sample::select(Axis::ALL.to_vec()),
+        first in 0usize..3,
+        step in 2usize..6,
+    ) {
+        let (full, image) = small_labelled_blobs(&blobs, sz, amp);
+        let n = full.slice_count(axis);
+        let drawn: Vec<usize> = (first..n).step_by(step).collect();
+        prop_assume!(drawn.len() >= 2);
+        let mut sparse: LabelVolume = Volume::zeros(full.geometry().clone());
+        for &d in &drawn {
+            sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
+        }
+        let m = ImageGuided::new(image);
+        let boxed = interpolate_labels(&m, &sparse, axis, &drawn).unwrap();
+        let whole = interpolate_labels(&Unboxed(Box::new(m)), &sparse, axis, &drawn).unwrap();
+        let differ = boxed.data().iter().zip(whole.data()).filter(|(a, b)| a != b).count();
+        prop_assert!(differ == 0, "{} voxels differ on the box along {}", differ, axis);
+    }
 }

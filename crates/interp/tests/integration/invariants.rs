@@ -8,6 +8,8 @@ use interslice_interp::{
     interpolate_labels_with_confidence, methods,
 };
 use proptest::prelude::*;
+
+use crate::common::Unboxed;
 use std::sync::Mutex;
 
 /// Up to three random ellipsoids in a small anisotropic volume.
@@ -71,27 +73,6 @@ proptest! {
                 );
             }
         }
-    }
-}
-
-/// A method as it is, but never run on its label's box.
-struct Unboxed(Box<dyn Interpolator>);
-
-impl Interpolator for Unboxed {
-    fn name(&self) -> &'static str {
-        self.0.name()
-    }
-    fn description(&self) -> &'static str {
-        self.0.description()
-    }
-    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
-        self.0.interpolate(input)
-    }
-    fn interpolate_with_confidence(
-        &self,
-        input: SparseMask<'_>,
-    ) -> Result<(Mask, Volume<f32>), InterpError> {
-        self.0.interpolate_with_confidence(input)
     }
 }
 

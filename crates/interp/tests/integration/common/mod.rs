@@ -1,5 +1,6 @@
 //! Shapes and measures shared by the interpolation tests.
 use interslice_core::{Axis, Geometry, LengthUnit, Mask, Volume};
+use interslice_interp::{InterpError, Interpolator, SparseMask};
 
 /// A mask from an implicit shape in physical coordinates of voxel centres.
 pub fn shape(dims: [usize; 3], spacing: [f64; 3], inside: impl Fn([f64; 3]) -> bool) -> Mask {
@@ -52,4 +53,26 @@ pub fn dice(a: &Mask, b: &Mask) -> f64 {
         nb += y as usize;
     }
     2.0 * tp as f64 / (na + nb) as f64
+}
+
+/// A method as it is, but never run on its label's box
+/// (`interslice_interp::crop`): what a boxed run is compared with.
+pub struct Unboxed(pub Box<dyn Interpolator>);
+
+impl Interpolator for Unboxed {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn description(&self) -> &'static str {
+        self.0.description()
+    }
+    fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        self.0.interpolate(input)
+    }
+    fn interpolate_with_confidence(
+        &self,
+        input: SparseMask<'_>,
+    ) -> Result<(Mask, Volume<f32>), InterpError> {
+        self.0.interpolate_with_confidence(input)
+    }
 }
