@@ -403,10 +403,20 @@ fn walk(
 /// walk's decision there is taken as diluted (`undiluted`).
 pub const DILUTED: f64 = 0.8;
 
-/// The walk's logits `z` on one skipped slice, raised by one constant where
-/// they are diluted: where `z > 0` covers less than [`DILUTED`] of the area
-/// of the shape prior `φ < 0` on that slice, until it covers the prior's
-/// area (the pixels of highest `z` first, so the walk still decides where).
+/// The walk's logits `z = p − ½` on one skipped slice, its threshold
+/// lowered where they are diluted: where `z > 0` covers less than
+/// [`DILUTED`] of the area of the shape prior `φ < 0` on that slice, the
+/// threshold `t` on the probability `p` falls from one half until `p > t`
+/// covers the prior's area (the pixels of highest `p` first, so the walk
+/// still decides where). The logits returned are measured from the new
+/// threshold, each side scaled back to `[−½, ½]`: `½ (p − t) / t` below it
+/// and `½ (p − t) / (1 − t)` above. So `z > 0` is the decision, and the
+/// confidence `σ(c |z|)` read from them is least at the threshold and as
+/// sure as before where `p` is 0 or 1. Lifting every logit by `½ − t`
+/// instead (what this did before) put the background the walk never
+/// reached (`p` = 0) next to the threshold: on ITK's T1 class 3 traced
+/// every 4th slice, a skipped slice was below 0.75 sure on all its pixels,
+/// and the server outlined the whole slice as uncertain.
 ///
 /// Why: a random walk seeded by the drawn slices spreads its probability
 /// across the gap; on a thin structure (a thin tissue class, a small lesion)
@@ -443,7 +453,18 @@ pub(crate) fn undiluted(mut z: Vec<f32>, phi: &[f32]) -> Vec<f32> {
     let nth = target.min(order.len()) - 1;
     let (_, &mut at, _) = order.select_nth_unstable_by(nth, |a, b| b.total_cmp(a));
     let lift = 1e-4 - at;
-    z.iter_mut().for_each(|v| *v += lift);
+    // In `z`: the threshold `t − ½ = −lift`, so `p − t = z + lift`, and the
+    // sides `t = ½ − lift` and `1 − t = ½ + lift` wide.
+    let below = (1.0 - 2.0 * lift).max(f32::MIN_POSITIVE);
+    let above = 1.0 + 2.0 * lift;
+    z.iter_mut().for_each(|v| {
+        let from = *v + lift;
+        *v = if from > 0.0 {
+            from / above
+        } else {
+            from / below
+        };
+    });
     z
 }
 
@@ -541,10 +562,20 @@ mod tests {
         let inside: Vec<usize> = (0..8).filter(|&i| raised[i] > 0.0).collect();
         // The four highest logits, wherever they are: the walk decides where.
         assert_eq!(inside, vec![0, 1, 3, 5]);
-        // One constant: the differences are kept.
-        for i in 1..8 {
-            assert!(((raised[i] - raised[0]) - (z[i] - z[0])).abs() < 1e-6);
+        // Measured from the lowered threshold: the order is kept, and the
+        // ends of the probability stay where they were (p = 0 at −½).
+        let lift = 1e-4 + 0.3; // the 4th highest logit is −0.3
+        for i in 0..8 {
+            let from = z[i] + lift;
+            let expected = if from > 0.0 {
+                from / (1.0 + 2.0 * lift)
+            } else {
+                from / (1.0 - 2.0 * lift)
+            };
+            assert!((raised[i] - expected).abs() < 1e-6, "{i}: {}", raised[i]);
         }
+        let ends = undiluted(vec![-0.5, 0.3, -0.1, -0.2], &[-1.0, -1.0, -1.0, 1.0]);
+        assert!((ends[0] + 0.5).abs() < 1e-4, "{ends:?}");
         // 4 of 5 expected pixels (at least `DILUTED`): left as it was.
         let phi5 = [-1.0f32, -1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0];
         let z4 = vec![0.3f32, 0.2, 0.1, 0.4, -0.1, -2.0, -3.0, -0.4];
