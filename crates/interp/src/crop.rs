@@ -27,9 +27,10 @@
 //! volume goes on) is computed again as well. Tests compare both ways.
 use crate::image::fuse::{band, tau};
 use crate::image::walk;
+use crate::method::WithConfidence;
 use crate::slices::{Plane, centroid};
 use crate::{InterpError, Interpolator, SparseMask};
-use interslice_core::{Axis, Geometry, Mask, Volume, Voxel};
+use interslice_core::{Axis, Cancel, Geometry, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
 /// Background voxels kept around the drawn outlines, in-plane.
@@ -188,6 +189,28 @@ impl<'a> DrawnSlice<'a> {
             extent: extent(inside, w),
         }
     }
+
+    /// The drawn slices of one label's `input`, whose `planes` were read by
+    /// [`drawn_planes`].
+    pub fn of(input: &SparseMask<'_>, planes: &'a [Vec<bool>]) -> Vec<DrawnSlice<'a>> {
+        let width = input.mask.dims()[input.axis.in_plane().0];
+        input
+            .drawn
+            .iter()
+            .zip(planes)
+            .map(|(&d, p)| DrawnSlice::new(d, p, width))
+            .collect()
+    }
+}
+
+/// The drawn slices of `input` along its axis, read once (in parallel), for
+/// [`DrawnSlice::of`].
+pub fn drawn_planes(input: &SparseMask<'_>) -> Result<Vec<Vec<bool>>, InterpError> {
+    Ok(input
+        .drawn
+        .par_iter()
+        .map(|&d| input.mask.slice(input.axis, d))
+        .collect::<Result<_, _>>()?)
 }
 
 impl LabelBox {
@@ -336,63 +359,35 @@ impl LabelBox {
         })
     }
 
-    /// Run `method` on the box; `None` when it would reach past the box
+    /// Run `method` on the box (with its confidence when `confidence`),
+    /// stopped once `cancel` is; `None` when it would reach past the box
     /// ([`InterpError::OutsideBox`]) or its result reaches an open side (the
     /// caller then tries a larger box or the whole volume).
     pub fn interpolate(
         &self,
         method: &dyn Interpolator,
-        geometry: &Geometry,
-        axis: Axis,
+        (geometry, axis): (&Geometry, Axis),
         slices: &[DrawnSlice<'_>],
-    ) -> Result<Option<Mask>, InterpError> {
-        self.run(
-            method,
-            geometry,
-            axis,
-            slices,
-            |m, i| m.interpolate(i),
-            |m| m,
-        )
-    }
-
-    /// [`LabelBox::interpolate`] with the method's confidence on the box.
-    pub fn interpolate_with_confidence(
-        &self,
-        method: &dyn Interpolator,
-        geometry: &Geometry,
-        axis: Axis,
-        slices: &[DrawnSlice<'_>],
-    ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
-        self.run(
-            method,
-            geometry,
-            axis,
-            slices,
-            |m, i| m.interpolate_with_confidence(i),
-            |(m, _)| m,
-        )
-    }
-
-    /// `call` on the box's input; `None` as [`LabelBox::interpolate`] says,
-    /// judged on the result's `mask`.
-    fn run<R>(
-        &self,
-        method: &dyn Interpolator,
-        geometry: &Geometry,
-        axis: Axis,
-        slices: &[DrawnSlice<'_>],
-        call: impl FnOnce(&dyn Interpolator, SparseMask<'_>) -> Result<R, InterpError>,
-        mask: impl Fn(&R) -> &Mask,
-    ) -> Result<Option<R>, InterpError> {
+        confidence: bool,
+        cancel: Option<&Cancel>,
+    ) -> Result<Option<WithConfidence>, InterpError> {
         let (m, drawn) = self.sparse(geometry, axis, slices)?;
         let cut = method.for_box(self);
         let method = cut.as_deref().unwrap_or(method);
-        let r = match call(method, SparseMask::new(&m, axis, &drawn).inside_box()) {
+        let mut input = SparseMask::new(&m, axis, &drawn).inside_box();
+        input.cancel = cancel;
+        let run = if confidence {
+            method
+                .interpolate_with_confidence(input)
+                .map(|(m, c)| (m, Some(c)))
+        } else {
+            method.interpolate(input).map(|m| (m, None))
+        };
+        let r = match run {
             Err(InterpError::OutsideBox) => return Ok(None),
             r => r?,
         };
-        Ok((!self.reaches_open_side(mask(&r), axis, geometry.dims)).then_some(r))
+        Ok((!self.reaches_open_side(&r.0, axis, geometry.dims)).then_some(r))
     }
 
     /// The box grown in-plane far enough for a shape method's confidence

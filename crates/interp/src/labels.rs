@@ -12,11 +12,12 @@
 //! A method that reads no further than its tracing's surroundings
 //! ([`Interpolator::box_reach`]) runs on the label's box only
 //! ([`crate::crop`]).
-use crate::crop::{DrawnSlice, LabelBox, grow_extent};
+use crate::crop::{DrawnSlice, LabelBox, drawn_planes, grow_extent};
+use crate::method::WithConfidence;
 use crate::{InterpError, Interpolator, SparseMask};
 use interslice_core::morph::Connectivity;
 use interslice_core::regions::whole_structure;
-use interslice_core::{Axis, Geometry, LabelVolume, Mask, Volume, Voxel};
+use interslice_core::{Axis, Cancel, Geometry, LabelVolume, Mask, Volume, Voxel};
 use rayon::prelude::*;
 
 /// Most labels a caller interpolates unless told otherwise: every label an
@@ -143,37 +144,18 @@ fn run<T: Voxel>(
                         extent: planes.extent(i, li),
                     })
                     .collect();
-                let reach = method.box_reach();
-                for b in LabelBox::tries(geometry, axis, &slices, reach) {
-                    if !confidence {
-                        if let Some(m) = b.interpolate(method, geometry, axis, &slices)? {
-                            return Ok(Piece::Boxed(b, m, None));
-                        }
-                        continue;
-                    }
-                    // The confidence reaches further than the result: a
-                    // larger box, or the whole volume.
-                    let grown = reach
-                        .confidence_on_box()
-                        .then(|| b.grown_for_confidence(geometry, axis, drawn))
-                        .flatten();
-                    let Some(b) = grown else {
-                        break;
-                    };
-                    if let Some((m, c)) =
-                        b.interpolate_with_confidence(method, geometry, axis, &slices)?
-                    {
-                        return Ok(Piece::Boxed(b, m, Some(c)));
-                    }
-                }
-                let m = planes.on_grid(&filled);
-                let input = SparseMask::new(&m, axis, drawn);
-                if confidence {
-                    let (mask, c) = method.interpolate_with_confidence(input)?;
-                    Ok(Piece::Whole(mask, Some(c)))
-                } else {
-                    Ok(Piece::Whole(method.interpolate(input)?, None))
-                }
+                let whole = |confidence: bool| {
+                    let m = planes.on_grid(&filled);
+                    whole_run(method, SparseMask::new(&m, axis, drawn), confidence)
+                };
+                label_piece(
+                    method,
+                    (geometry, axis, drawn),
+                    &slices,
+                    confidence,
+                    None,
+                    whole,
+                )
             })
             .collect();
         for (&l, r) in labels[first..last].iter().zip(results) {
@@ -205,6 +187,97 @@ fn run<T: Voxel>(
         }
     }
     Ok((out, conf))
+}
+
+/// One label's result: on the boxes [`LabelBox::tries`] gives for the
+/// method, the smallest that holds it, else `whole(confidence)` on the
+/// whole volume. With the confidence, a box is grown until the confidence
+/// reaches [`crate::crop::SURE`] at its sides, for the methods whose
+/// confidence allows it ([`crate::crop::BoxReach::confidence_on_box`]).
+fn label_piece(
+    method: &dyn Interpolator,
+    (geometry, axis, drawn): (&Geometry, Axis, &[usize]),
+    slices: &[DrawnSlice<'_>],
+    confidence: bool,
+    cancel: Option<&Cancel>,
+    whole: impl FnOnce(bool) -> Result<WithConfidence, InterpError>,
+) -> LabelResult {
+    let reach = method.box_reach();
+    for b in LabelBox::tries(geometry, axis, slices, reach) {
+        // The confidence reaches further than the result: a larger box, or
+        // the whole volume.
+        let b = if confidence {
+            let grown = reach
+                .confidence_on_box()
+                .then(|| b.grown_for_confidence(geometry, axis, drawn))
+                .flatten();
+            let Some(grown) = grown else {
+                break;
+            };
+            grown
+        } else {
+            b
+        };
+        if let Some((m, c)) = b.interpolate(method, (geometry, axis), slices, confidence, cancel)? {
+            return Ok(Piece::Boxed(b, m, c));
+        }
+    }
+    let (m, c) = whole(confidence)?;
+    Ok(Piece::Whole(m, c))
+}
+
+/// `method` on the whole volume's `input`, with its confidence when asked.
+fn whole_run(
+    method: &dyn Interpolator,
+    input: SparseMask<'_>,
+    confidence: bool,
+) -> Result<WithConfidence, InterpError> {
+    if confidence {
+        let (m, c) = method.interpolate_with_confidence(input)?;
+        Ok((m, Some(c)))
+    } else {
+        Ok((method.interpolate(input)?, None))
+    }
+}
+
+/// One label's mask interpolated as [`interpolate_labels`] interpolates
+/// each label: on the label's box where the method allows it
+/// ([`crate::crop`]), the result pasted into a mask of the whole volume;
+/// with `confidence`, its confidence too (1 outside the box, as
+/// [`interpolate_labels_with_confidence`] takes it). For a caller that
+/// holds one label's mask, such as the server's preview; `input`'s
+/// cancellation token stops the box's run as the whole volume's.
+pub fn interpolate_label(
+    method: &dyn Interpolator,
+    input: SparseMask<'_>,
+    confidence: bool,
+) -> Result<WithConfidence, InterpError> {
+    input.validate()?;
+    let (axis, geometry) = (input.axis, input.mask.geometry());
+    let planes = drawn_planes(&input)?;
+    let slices = DrawnSlice::of(&input, &planes);
+    let whole = |confidence: bool| whole_run(method, input, confidence);
+    let piece = label_piece(
+        method,
+        (geometry, axis, input.drawn),
+        &slices,
+        confidence,
+        input.cancel,
+        whole,
+    )?;
+    Ok(match piece {
+        Piece::Whole(m, c) => (m, c),
+        Piece::Boxed(b, m, c) => {
+            let mut out: Mask = zeros_in_parallel(geometry.clone());
+            b.paint(&mut out, &m, true);
+            let conf = c.map(|c| {
+                let mut all = Volume::filled(geometry.clone(), 1.0f32);
+                b.lower(&mut all, &c);
+                all
+            });
+            (out, conf)
+        }
+    })
 }
 
 /// A volume of zeros written by every core: an output of one volume's size

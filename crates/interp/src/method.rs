@@ -22,6 +22,9 @@ pub enum InterpError {
     OutsideBox,
 }
 
+/// A label's interpolated mask and, when asked for, its confidence per voxel.
+pub type WithConfidence = (Mask, Option<Volume<f32>>);
+
 /// The input of one interpolation: one label's mask, whose drawn slices
 /// along `axis` carry the tracing, and the sorted, de-duplicated drawn indices.
 #[derive(Debug, Clone, Copy)]

@@ -16,6 +16,7 @@ use interslice_core::contour_file::ContourFile;
 use interslice_core::{Axis, Cancel, Contour, Geometry, LabelVolume, Mask, Volume};
 use interslice_interp::confidence::shape_confidence;
 use interslice_interp::image::Conditioned;
+use interslice_interp::labels;
 use interslice_interp::{InterpError, Interpolator, SparseMask, multi_axis};
 use interslice_store::{ContourQuery, Store, StoredContour};
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
@@ -270,9 +271,10 @@ fn interpolate_axes(
         .iter()
         .map(|(a, m, d)| SparseMask::new(m, *a, d).with_cancel(cancel))
         .collect();
-    let (out, conf) = if confidence && inputs.len() == 1 {
-        let (m, c) = method.interpolate_with_confidence(inputs[0])?;
-        (m, Some(c))
+    let (out, conf) = if inputs.len() == 1 {
+        // On the label's box where the method allows it, as the CLI runs
+        // each label of a label volume.
+        labels::interpolate_label(method, inputs[0], confidence)?
     } else {
         let out = multi_axis::combine(method, &inputs).map_err(|e| match e {
             InterpError::Input(m) if inputs.len() > 1 => {

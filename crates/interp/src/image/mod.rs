@@ -53,7 +53,7 @@ pub mod walk;
 
 use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill};
 use crate::confidence::{best_scale, shape_confidence, sigmoid};
-use crate::crop::{BoxReach, LabelBox};
+use crate::crop::{BoxReach, DrawnSlice, LabelBox, drawn_planes};
 use crate::jump::jumping_gaps;
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::{FAR, signed_distance};
@@ -640,8 +640,41 @@ impl ImageGuided {
         model::edge_contrast(slices, &Plane::of(input)).unwrap_or(0.0)
     }
 
-    /// Decide, on the drawn slices of `input`, the prior and the fusion.
+    /// Decide, on the drawn slices of `input`, the prior and the fusion:
+    /// on the label's box and the box's part of the image
+    /// ([`BoxReach::Image`]) where it is smaller than the volume, which
+    /// gives the whole volume's plan ([`ImageGuided::plan_on_the_whole_volume`],
+    /// property-tested), so a caller that asks for the plan of a whole
+    /// cell (the server's recommendation) pays for the label's
+    /// surroundings only.
     pub fn plan(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
+        input.validate()?;
+        check_grid(&self.image, input)?;
+        if input.in_box || self.on_stack {
+            return self.plan_on_the_whole_volume(input);
+        }
+        let (axis, geometry) = (input.axis, input.mask.geometry());
+        let planes = drawn_planes(input)?;
+        let slices = DrawnSlice::of(input, &planes);
+        for b in LabelBox::tries(geometry, axis, &slices, BoxReach::Image) {
+            let (m, drawn) = b.sparse(geometry, axis, &slices)?;
+            let mut boxed = SparseMask::new(&m, axis, &drawn).inside_box();
+            boxed.cancel = input.cancel;
+            let on_box = ImageGuided {
+                image: self.image.cut(&b),
+                on_stack: false,
+                planned: None,
+            };
+            match on_box.plan_on_the_whole_volume(&boxed) {
+                Err(InterpError::OutsideBox) => continue,
+                plan => return plan,
+            }
+        }
+        self.plan_on_the_whole_volume(input)
+    }
+
+    /// [`ImageGuided::plan`] on `input` as it is, never on a box of it.
+    pub fn plan_on_the_whole_volume(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
         input.validate()?;
         check_grid(&self.image, input)?;
         let plane = Plane::of(input);
@@ -1069,10 +1102,21 @@ impl Interpolator for ImageGuided {
     }
 
     fn for_box(&self, b: &LabelBox) -> Option<Box<dyn Interpolator>> {
+        // A plan holds on the box (what it reads lies inside), its drawn
+        // slices counted from the box's first.
+        let planned = self.planned.as_ref().map(|(axis, drawn, plan)| {
+            let (lo, n) = (b.lo[axis.dim()], b.dims[axis.dim()]);
+            let inside = drawn
+                .iter()
+                .filter(|&&d| (lo..lo + n).contains(&d))
+                .map(|&d| d - lo)
+                .collect();
+            (*axis, inside, plan.clone())
+        });
         Some(Box::new(ImageGuided {
             image: self.image.cut(b),
             on_stack: self.on_stack,
-            planned: None,
+            planned,
         }))
     }
 

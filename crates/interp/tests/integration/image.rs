@@ -7,6 +7,7 @@ use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
 use interslice_interp::image::{EDGE_SEPARATION, ImageGuided, Walk, intensity_f32};
+use interslice_interp::labels::interpolate_label;
 use interslice_interp::protocol::{bounding_box, crop, dice_on, drawn_for_skip, score, sparse_of};
 use interslice_interp::slices::shows_on;
 use interslice_interp::{Interpolator, SparseMask, interpolate_labels};
@@ -755,8 +756,21 @@ proptest! {
         }
         let m = ImageGuided::new(image);
         let boxed = interpolate_labels(&m, &sparse, axis, &drawn).unwrap();
-        let whole = interpolate_labels(&Unboxed(Box::new(m)), &sparse, axis, &drawn).unwrap();
+        let whole = interpolate_labels(&Unboxed(Box::new(m.clone())), &sparse, axis, &drawn).unwrap();
         let differ = boxed.data().iter().zip(whole.data()).filter(|(a, b)| a != b).count();
         prop_assert!(differ == 0, "{} voxels differ on the box along {}", differ, axis);
+        // One label, as the server interpolates it: planned on the whole
+        // volume and run there, against planned on the box (what `plan`
+        // does) and run there, and against the whole volume's plan carried
+        // to the box.
+        let mask = sparse.map(|l| l == 1);
+        let input = SparseMask::new(&mask, axis, &drawn);
+        let whole_plan = m.plan_on_the_whole_volume(&input).unwrap();
+        let planned = m.clone().with_plan(&input, whole_plan);
+        let whole = planned.interpolate(input).unwrap();
+        let (boxed, _) = interpolate_label(&m, input, false).unwrap();
+        prop_assert!(boxed == whole, "label 1 differs on the box along {}", axis);
+        let (carried, _) = interpolate_label(&planned, input, false).unwrap();
+        prop_assert!(carried == whole, "label 1 with the carried plan differs along {}", axis);
     }
 }
