@@ -859,7 +859,8 @@ impl ImageGuided {
                         .logit(real, &plane)
                         .unwrap_or_else(|| vec![-0.5; plane.len()]);
                     let z = walk::undiluted(z, phi);
-                    (walk_mask(field, phi, &z, &plane, reach(*delta)), z)
+                    let mask = walk_mask(field, phi, &z, &plane, reach(*delta));
+                    (mask, z)
                 })
                 .unzip();
             (held_dice(&masks), logits)
@@ -1023,7 +1024,14 @@ fn decide_slices(
         let mut c = shape_confidence(&mask, input, confidence.1);
         for (s, f) in decided.iter().enumerate() {
             if let Some((_, z)) = f {
-                let v: Vec<f32> = z.iter().map(|&x| confidence_of(x)).collect();
+                // NaN: the decision says nothing there (past the walk's
+                // box), and the shape's confidence stands.
+                let shape = c.slice(input.axis, s).expect("slice in range");
+                let v: Vec<f32> = z
+                    .iter()
+                    .zip(shape)
+                    .map(|(&x, sc)| if x.is_nan() { sc } else { confidence_of(x) })
+                    .collect();
                 c.set_slice(input.axis, s, &v).expect("slice in range");
             }
         }
@@ -1076,7 +1084,8 @@ impl ImageGuided {
                 } else {
                     band(&plane, delta)
                 };
-                Some((walk_mask(plan.field, phi, &z, &plane, reach), z))
+                let mask = walk_mask(plan.field, phi, &z, &plane, reach);
+                Some((mask, walked.in_box_only(z, s, &plane)))
             },
             |z| sigmoid(plan.walk_scale * z.abs()),
         )

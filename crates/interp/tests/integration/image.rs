@@ -774,3 +774,37 @@ proptest! {
         prop_assert!(carried == whole, "label 1 with the carried plan differs along {}", axis);
     }
 }
+
+/// A walk decides nothing past its box (the drawn outlines grown by 8
+/// pixels): there, on a walked slice, the confidence is the shape's, sure
+/// far from every outline, not the walk's "certainly outside" at its fitted
+/// scale (`σ(c/2)`, 0.88 at the untested scale 4). A small ball in a wide
+/// slice, its walk on the whole box forced.
+#[test]
+fn past_the_walks_box_the_confidence_is_the_shapes() {
+    let truth = shape([64, 64, 30], [1.0; 3], |p| {
+        in_ellipsoid(p, [20.0, 20.0, 15.0], [6.0, 6.0, 8.3])
+    });
+    let drawn: Vec<usize> = (7..=23).step_by(4).collect();
+    let sparse = sparse_of(&truth, Axis::Z, &drawn);
+    let input = SparseMask::new(&sparse, Axis::Z, &drawn);
+    let m = ImageGuided::new(image_of(&truth, 40.0));
+    let mut plan = m.plan(&input).unwrap();
+    plan.walk = Walk::Box;
+    plan.walk_scale = 1.0;
+    let (out, conf) = m
+        .with_plan(&input, plan)
+        .interpolate_with_confidence(input)
+        .unwrap();
+    for s in (7..23).filter(|s| !drawn.contains(s)) {
+        let c = conf.slice(Axis::Z, s).unwrap();
+        // The far corner, 30 pixels and more from the ball: the shape's.
+        let corner = c[63 + 64 * 63];
+        assert!(corner > 0.999, "slice {s}: {corner}");
+        // In the walk's box, the walk's own: at scale 1 never above
+        // σ(1/2) = 0.62 at the pixels it reached.
+        let least = c.iter().copied().fold(1.0f32, f32::min);
+        assert!(least < 0.63, "slice {s}: {least}");
+    }
+    assert!(out.slice(Axis::Z, 15).unwrap().iter().any(|&x| x));
+}
