@@ -24,7 +24,11 @@
 //! read or paint past the box's sides it stops with
 //! [`InterpError::OutsideBox`], and the runner tries a larger box, then the
 //! whole volume. A result that reaches the box's in-plane sides (where the
-//! volume goes on) is computed again as well. Tests compare both ways.
+//! volume goes on) is computed again as well. The image-aware method, whose
+//! shape prior follows drift and which reads the image around that prior,
+//! gets the drift's box grown by what it reads ([`BoxReach::Image`]) and
+//! the box's part of the image ([`crate::Interpolator::for_box`]). Tests
+//! compare both ways.
 use crate::image::fuse::{band, tau};
 use crate::image::walk;
 use crate::method::WithConfidence;
