@@ -408,12 +408,25 @@ impl LabelBox {
         axis: Axis,
         drawn: &[usize],
     ) -> Option<LabelBox> {
-        let (a, b) = axis.in_plane();
         let plane = Plane::along(geometry, axis);
         let widest = drawn.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(1);
-        let reach = SURE_LOGIT * f64::from(tau(&plane, (widest - 1) as f64));
+        self.grown_until_sure(geometry, axis, f64::from(tau(&plane, (widest - 1) as f64)))
+    }
+
+    /// The box grown in-plane by `SURE_LOGIT · scale` (physical units): how
+    /// far from every boundary and outline inside it a confidence
+    /// `σ(|φ| / scale)` (or surer) reaches [`SURE`]. `None` when the grown
+    /// box is the whole volume.
+    pub fn grown_until_sure(
+        &self,
+        geometry: &Geometry,
+        axis: Axis,
+        scale: f64,
+    ) -> Option<LabelBox> {
+        let (a, b) = axis.in_plane();
+        let plane = Plane::along(geometry, axis);
         let pixel = plane.spacing[0].min(plane.spacing[1]);
-        let extra = (reach / pixel).ceil() as usize;
+        let extra = (SURE_LOGIT * scale / pixel).ceil() as usize;
         let mut grown = *self;
         for d in [a, b] {
             let hi = (self.lo[d] + self.dims[d] + extra).min(geometry.dims[d]);

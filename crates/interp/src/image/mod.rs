@@ -60,7 +60,7 @@ use crate::sdf::{FAR, signed_distance};
 use crate::slices::{Plane, assemble, median_gap, showing, shows_on, to_nearest_drawn};
 use crate::{InterpError, Interpolator, SparseMask};
 pub use conditioned::Conditioned;
-use fuse::{Params, band, fuse, separate};
+use fuse::{Params, band, fuse, separate, tau};
 use interslice_core::{AnyVolume, Axis, Mask, Volume};
 use model::{IntensityModel, blur};
 use rayon::prelude::*;
@@ -394,6 +394,9 @@ pub struct ImageGuided {
     /// A plan already made ([`ImageGuided::with_plan`]) for the input along
     /// this axis with these drawn slices, used instead of planning again.
     planned: Option<(Axis, Vec<usize>, Plan)>,
+    /// Whether a run on a whole volume works on the label's box
+    /// ([`ImageGuided::on_the_whole_volume`]).
+    boxed: bool,
 }
 
 /// Which random walk, if any, a label follows instead of the fusion
@@ -597,6 +600,17 @@ impl ImageGuided {
             image: image.into(),
             on_stack: false,
             planned: None,
+            boxed: true,
+        }
+    }
+
+    /// The method that never works on a label's box when given a whole
+    /// volume: its plan, result and confidence are computed on every voxel
+    /// (what the box is tested against).
+    pub fn on_the_whole_volume(self) -> ImageGuided {
+        ImageGuided {
+            boxed: false,
+            ..self
         }
     }
 
@@ -643,15 +657,15 @@ impl ImageGuided {
     /// Decide, on the drawn slices of `input`, the prior and the fusion:
     /// on the label's box and the box's part of the image
     /// ([`BoxReach::Image`]) where it is smaller than the volume, which
-    /// gives the whole volume's plan ([`ImageGuided::plan_on_the_whole_volume`],
-    /// property-tested), so a caller that asks for the plan of a whole
-    /// cell (the server's recommendation) pays for the label's
-    /// surroundings only.
+    /// gives the whole volume's plan (property-tested against
+    /// [`ImageGuided::on_the_whole_volume`]), so a caller that asks for the
+    /// plan of a whole cell (the server's recommendation) pays for the
+    /// label's surroundings only.
     pub fn plan(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
         input.validate()?;
         check_grid(&self.image, input)?;
-        if input.in_box || self.on_stack {
-            return self.plan_on_the_whole_volume(input);
+        if input.in_box || self.on_stack || !self.boxed {
+            return self.plan_here(input);
         }
         let (axis, geometry) = (input.axis, input.mask.geometry());
         let planes = drawn_planes(input)?;
@@ -660,21 +674,95 @@ impl ImageGuided {
             let (m, drawn) = b.sparse(geometry, axis, &slices)?;
             let mut boxed = SparseMask::new(&m, axis, &drawn).inside_box();
             boxed.cancel = input.cancel;
-            let on_box = ImageGuided {
-                image: self.image.cut(&b),
-                on_stack: false,
-                planned: None,
-            };
-            match on_box.plan_on_the_whole_volume(&boxed) {
+            match self.on(&b).plan_here(&boxed) {
                 Err(InterpError::OutsideBox) => continue,
                 plan => return plan,
             }
         }
-        self.plan_on_the_whole_volume(input)
+        self.plan_here(input)
     }
 
-    /// [`ImageGuided::plan`] on `input` as it is, never on a box of it.
-    pub fn plan_on_the_whole_volume(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
+    /// The method on the part `b` of the volume: its image cut to the box,
+    /// a plan made on the whole volume carried over (what it reads lies
+    /// inside), its drawn slices counted from the box's first.
+    fn on(&self, b: &LabelBox) -> ImageGuided {
+        let planned = self.planned.as_ref().map(|(axis, drawn, plan)| {
+            let (lo, n) = (b.lo[axis.dim()], b.dims[axis.dim()]);
+            let inside = drawn
+                .iter()
+                .filter(|&&d| (lo..lo + n).contains(&d))
+                .map(|&d| d - lo)
+                .collect();
+            (*axis, inside, plan.clone())
+        });
+        ImageGuided {
+            image: self.image.cut(b),
+            on_stack: self.on_stack,
+            planned,
+            boxed: self.boxed,
+        }
+    }
+
+    /// The result and its confidence computed on the label's box grown
+    /// until the confidence reaches [`crate::crop::SURE`] at its sides, 1
+    /// taken outside, as the label runner takes a shape method's
+    /// ([`LabelBox::grown_for_confidence`]). How far that is depends on the
+    /// plan, so the plan comes first (on the box, [`ImageGuided::plan`]):
+    /// past the fusion's band and the walk's box every confidence this
+    /// method writes is `σ(c |φ| / τ)` or surer, `c` the plan's scale and
+    /// `τ` the larger of the shape's `τ(δ)` and the plan's, `δ` at most the
+    /// widest gap less one. `None` (the whole volume, then) where the grown
+    /// box is the whole volume, the run reaches past it, or the method
+    /// runs on the whole volume anyway.
+    fn confidence_on_box(
+        &self,
+        input: &SparseMask<'_>,
+    ) -> Result<Option<(Mask, Volume<f32>)>, InterpError> {
+        if input.in_box || self.on_stack || !self.boxed {
+            return Ok(None);
+        }
+        input.validate()?;
+        check_grid(&self.image, input)?;
+        let plan = match &self.planned {
+            Some((axis, drawn, plan)) if *axis == input.axis && drawn == input.drawn => {
+                plan.clone()
+            }
+            _ => self.plan(input)?,
+        };
+        let (axis, geometry) = (input.axis, input.mask.geometry());
+        let plane = Plane::of(input);
+        let widest = input.drawn.windows(2).map(|w| w[1] - w[0]).max();
+        let delta = widest.unwrap_or(1).saturating_sub(1) as f64;
+        let tau_max = tau(&plane, delta).max(plan.tau(delta));
+        let reach = f64::from(tau_max / plan.scale);
+        let planes = drawn_planes(input)?;
+        let slices = DrawnSlice::of(input, &planes);
+        let planned = self.clone().with_plan(input, plan);
+        for b in LabelBox::tries(geometry, axis, &slices, BoxReach::Image) {
+            let Some(grown) = b.grown_until_sure(geometry, axis, reach) else {
+                return Ok(None);
+            };
+            let (m, drawn) = grown.sparse(geometry, axis, &slices)?;
+            let mut boxed = SparseMask::new(&m, axis, &drawn).inside_box();
+            boxed.cancel = input.cancel;
+            let (mask, conf) = match planned.on(&grown).run(&boxed, true) {
+                Err(InterpError::OutsideBox) => continue,
+                r => r?,
+            };
+            if grown.reaches_open_side(&mask, axis, geometry.dims) {
+                continue;
+            }
+            let mut out: Mask = Volume::zeros(geometry.clone());
+            grown.paint(&mut out, &mask, true);
+            let mut all = Volume::filled(geometry.clone(), 1.0f32);
+            grown.lower(&mut all, &conf.expect("confidence requested"));
+            return Ok(Some((out, all)));
+        }
+        Ok(None)
+    }
+
+    /// [`ImageGuided::plan`] on `input` as it is.
+    fn plan_here(&self, input: &SparseMask<'_>) -> Result<Plan, InterpError> {
         input.validate()?;
         check_grid(&self.image, input)?;
         let plane = Plane::of(input);
@@ -1111,28 +1199,16 @@ impl Interpolator for ImageGuided {
     }
 
     fn for_box(&self, b: &LabelBox) -> Option<Box<dyn Interpolator>> {
-        // A plan holds on the box (what it reads lies inside), its drawn
-        // slices counted from the box's first.
-        let planned = self.planned.as_ref().map(|(axis, drawn, plan)| {
-            let (lo, n) = (b.lo[axis.dim()], b.dims[axis.dim()]);
-            let inside = drawn
-                .iter()
-                .filter(|&&d| (lo..lo + n).contains(&d))
-                .map(|&d| d - lo)
-                .collect();
-            (*axis, inside, plan.clone())
-        });
-        Some(Box::new(ImageGuided {
-            image: self.image.cut(b),
-            on_stack: self.on_stack,
-            planned,
-        }))
+        Some(Box::new(self.on(b)))
     }
 
     fn interpolate_with_confidence(
         &self,
         input: SparseMask<'_>,
     ) -> Result<(Mask, Volume<f32>), InterpError> {
+        if let Some(on_box) = self.confidence_on_box(&input)? {
+            return Ok(on_box);
+        }
         let (m, c) = self.run(&input, true)?;
         Ok((m, c.expect("confidence requested")))
     }
@@ -1145,6 +1221,7 @@ impl Interpolator for ImageGuided {
         let stacked = crate::loo::stack(&self.image, axis, real)?;
         Ok(Some(Box::new(ImageGuided {
             on_stack: true,
+            boxed: self.boxed,
             ..ImageGuided::new(Arc::new(stacked))
         })))
     }

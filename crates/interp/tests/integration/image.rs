@@ -6,6 +6,7 @@ use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{Axis, Geometry, LabelVolume, LengthUnit, Mask, Volume};
 use interslice_interp::auto::ShapeAuto;
 use interslice_interp::crop::AXIS_SLICES;
+use interslice_interp::crop::SURE;
 use interslice_interp::image::{EDGE_SEPARATION, ImageGuided, Walk, intensity_f32};
 use interslice_interp::labels::interpolate_label;
 use interslice_interp::protocol::{bounding_box, crop, dice_on, drawn_for_skip, score, sparse_of};
@@ -755,8 +756,9 @@ proptest! {
             sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
         }
         let m = ImageGuided::new(image);
+        let on_whole = m.clone().on_the_whole_volume();
         let boxed = interpolate_labels(&m, &sparse, axis, &drawn).unwrap();
-        let whole = interpolate_labels(&Unboxed(Box::new(m.clone())), &sparse, axis, &drawn).unwrap();
+        let whole = interpolate_labels(&Unboxed(Box::new(on_whole.clone())), &sparse, axis, &drawn).unwrap();
         let differ = boxed.data().iter().zip(whole.data()).filter(|(a, b)| a != b).count();
         prop_assert!(differ == 0, "{} voxels differ on the box along {}", differ, axis);
         // One label, as the server interpolates it: planned on the whole
@@ -765,13 +767,22 @@ proptest! {
         // to the box.
         let mask = sparse.map(|l| l == 1);
         let input = SparseMask::new(&mask, axis, &drawn);
-        let whole_plan = m.plan_on_the_whole_volume(&input).unwrap();
-        let planned = m.clone().with_plan(&input, whole_plan);
-        let whole = planned.interpolate(input).unwrap();
+        let whole_plan = on_whole.plan(&input).unwrap();
+        let whole = on_whole.interpolate(input).unwrap();
         let (boxed, _) = interpolate_label(&m, input, false).unwrap();
         prop_assert!(boxed == whole, "label 1 differs on the box along {}", axis);
+        let planned = m.clone().with_plan(&input, whole_plan);
         let (carried, _) = interpolate_label(&planned, input, false).unwrap();
         prop_assert!(carried == whole, "label 1 with the carried plan differs along {}", axis);
+        // With the confidence, on the box grown until it is sure at its
+        // sides: the same labels, the same confidence but where the whole
+        // volume's is at least `SURE` and the box's is 1.
+        let (whole, c_whole) = on_whole.interpolate_with_confidence(input).unwrap();
+        let (boxed, c_boxed) = m.interpolate_with_confidence(input).unwrap();
+        prop_assert!(boxed == whole, "label 1 with its confidence differs along {}", axis);
+        for (&b, &w) in c_boxed.data().iter().zip(c_whole.data()) {
+            prop_assert!(b == w || (b == 1.0 && w >= SURE), "confidence {} on the box, {} on the whole volume", b, w);
+        }
     }
 }
 
