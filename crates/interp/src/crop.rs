@@ -458,6 +458,19 @@ impl LabelBox {
         Volume::from_vec(geometry, data).expect("one value per voxel of the box")
     }
 
+    /// A box's result (`mask`, and its confidence when asked) as the whole
+    /// volume's: background and a confidence of 1 outside the box.
+    pub fn onto_volume(&self, geometry: &Geometry, (mask, conf): WithConfidence) -> WithConfidence {
+        let mut out: Mask = crate::labels::zeros_in_parallel(geometry.clone());
+        self.paint(&mut out, &mask, true);
+        let conf = conf.map(|c| {
+            let mut all = Volume::filled(geometry.clone(), 1.0f32);
+            self.lower(&mut all, &c);
+            all
+        });
+        (out, conf)
+    }
+
     /// Lower `out` to the box's confidence `conf` where it is less (a
     /// voxel's confidence is the least of any label's there).
     pub fn lower(&self, out: &mut Volume<f32>, conf: &Volume<f32>) {

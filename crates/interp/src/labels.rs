@@ -267,16 +267,7 @@ pub fn interpolate_label(
     )?;
     Ok(match piece {
         Piece::Whole(m, c) => (m, c),
-        Piece::Boxed(b, m, c) => {
-            let mut out: Mask = zeros_in_parallel(geometry.clone());
-            b.paint(&mut out, &m, true);
-            let conf = c.map(|c| {
-                let mut all = Volume::filled(geometry.clone(), 1.0f32);
-                b.lower(&mut all, &c);
-                all
-            });
-            (out, conf)
-        }
+        Piece::Boxed(b, m, c) => b.onto_volume(geometry, (m, c)),
     })
 }
 
@@ -288,7 +279,7 @@ pub fn interpolate_label(
 /// The zeros are collected in blocks of [`ZERO_BLOCK`] values, each block
 /// one copy that runs at memory speed; collected value by value, the
 /// writes were not vectorised and took longer than the painting.
-fn zeros_in_parallel<T: Voxel>(geometry: Geometry) -> Volume<T> {
+pub(crate) fn zeros_in_parallel<T: Voxel>(geometry: Geometry) -> Volume<T> {
     let n = geometry.len();
     let mut data = rayon::iter::repeat_n([T::default(); ZERO_BLOCK], n.div_ceil(ZERO_BLOCK))
         .collect::<Vec<_>>()

@@ -742,21 +742,11 @@ impl ImageGuided {
             let Some(grown) = b.grown_until_sure(geometry, axis, reach) else {
                 return Ok(None);
             };
-            let (m, drawn) = grown.sparse(geometry, axis, &slices)?;
-            let mut boxed = SparseMask::new(&m, axis, &drawn).inside_box();
-            boxed.cancel = input.cancel;
-            let (mask, conf) = match planned.on(&grown).run(&boxed, true) {
-                Err(InterpError::OutsideBox) => continue,
-                r => r?,
-            };
-            if grown.reaches_open_side(&mask, axis, geometry.dims) {
-                continue;
+            let run = grown.interpolate(&planned, (geometry, axis), &slices, true, input.cancel)?;
+            if let Some(on_box) = run {
+                let (mask, conf) = grown.onto_volume(geometry, on_box);
+                return Ok(Some((mask, conf.expect("confidence requested"))));
             }
-            let mut out: Mask = Volume::zeros(geometry.clone());
-            grown.paint(&mut out, &mask, true);
-            let mut all = Volume::filled(geometry.clone(), 1.0f32);
-            grown.lower(&mut all, &conf.expect("confidence requested"));
-            return Ok(Some((out, all)));
         }
         Ok(None)
     }
@@ -947,8 +937,7 @@ impl ImageGuided {
                         .logit(real, &plane)
                         .unwrap_or_else(|| vec![-0.5; plane.len()]);
                     let z = walk::undiluted(z, phi);
-                    let mask = walk_mask(field, phi, &z, &plane, reach(*delta));
-                    (mask, z)
+                    (walk_mask(field, phi, &z, &plane, reach(*delta)), z)
                 })
                 .unzip();
             (held_dice(&masks), logits)
