@@ -507,12 +507,13 @@ impl Plan {
     }
 
     /// Fit the fusion on held-out `cases` whose shape-only
-    /// predictions are `predicted`: the prior's error that scales `τ`, the
-    /// `(w, λ)` of [`GRID`] with the best pooled Dice, kept only where it
-    /// clears [`MARGIN`], [`RHO`] and the floor ([`Plan::floor_share`]), and
-    /// the confidence's scale.
+    /// predictions are `predicted`: the prior's error that scales `τ`, and
+    /// the `(w, λ)` of [`GRID`] with the best pooled Dice, kept only where it
+    /// clears [`MARGIN`], [`RHO`] and the floor ([`Plan::floor_share`]),
+    /// the shape alone otherwise.
     fn fit_fusion(&mut self, cases: &[Case<'_>], predicted: &[&[bool]], plane: &Plane) {
         let plane = *plane;
+        self.params = Params::SHAPE_ONLY;
         // The prior's typical boundary error: the mean distance of its wrong
         // pixels from its boundary; where the prior lost the object (no
         // boundary on the slice), their depth inside the truth, how far
@@ -590,8 +591,13 @@ impl Plan {
             }
             self.loo_dice.1 = best.1;
         }
-        // Calibrate the confidence: the scale of the logit with the least
-        // log-loss on the held-out slices (a one-parameter Platt scaling).
+    }
+
+    /// Calibrate the confidence of the fitted fusion on held-out `cases`:
+    /// the scale of the logit with the least log-loss (a one-parameter
+    /// Platt scaling).
+    fn calibrate(&mut self, cases: &[Case<'_>], plane: &Plane) {
+        let plane = *plane;
         let flat = IntensityModel::flat();
         let m = self.model.as_ref().unwrap_or(&flat);
         let logits: Vec<(Vec<f32>, &Vec<bool>)> = cases
@@ -839,6 +845,7 @@ impl ImageGuided {
                 let (cases, copies) = cross_cases(input, &drawn_pairs, &plane);
                 if !cases.is_empty() {
                     plan.fit_fusion(&cases, &copies, &plane);
+                    plan.calibrate(&cases, &plane);
                 }
             }
             if !plan.fuses() && !self.on_stack && trusted && !pole_fill(prior, input)? {
@@ -870,6 +877,7 @@ impl ImageGuided {
             .collect();
         let predicted: Vec<&[bool]> = held.iter().map(|h| h.predicted.as_slice()).collect();
         plan.fit_fusion(&cases, &predicted, &plane);
+        plan.calibrate(&cases, &plane);
         if !self.on_stack {
             self.try_walk(input, &choice, &cases, &mut plan)?;
             if plan.walk == Walk::Off
@@ -938,7 +946,6 @@ impl ImageGuided {
                 .iter()
                 .map(|&i| choice.held[i].predicted.as_slice())
                 .collect();
-            rival.params = Params::SHAPE_ONLY;
             rival.fit_fusion(&even_cases, &even_predicted, &plane);
         }
         let ours: Vec<Vec<bool>> = odd
