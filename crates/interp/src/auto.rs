@@ -30,7 +30,7 @@ use crate::aligned::ShapeAligned;
 use crate::confidence::{best_scale, shape_confidence};
 use crate::crop::AXIS_SLICES;
 use crate::image::fuse::tau;
-use crate::jump::{APART, drifting_gaps, fade, jumping_gaps, overlap_counts};
+use crate::jump::{APART, Fade, drifting_gaps, fade, jumping_gaps, overlap_counts};
 use crate::loo::{Compact, HeldOut};
 use crate::nearest::Nearest;
 use crate::sdf::{SdfCache, signed_distance};
@@ -91,6 +91,13 @@ pub struct Choice {
 }
 
 impl ShapeAuto {
+    /// How its result fills the gaps across which the outline jumps: eased
+    /// fades, none on a leave-one-out stack (where across twice the gap
+    /// more outlines jump than on the tracer's own gaps).
+    fn fade(&self) -> Option<Fade> {
+        (!self.on_stack).then_some(Fade::Eased)
+    }
+
     /// Choose the candidate for `input` on its drawn slices.
     ///
     /// Only the drawn slices from [`AXIS_SLICES`] before the first that
@@ -338,15 +345,22 @@ pub fn field_of_pieces(slices: &[Vec<bool>], width: usize, height: usize) -> boo
     shown > 0 && pieces as f64 >= MANY_PIECES * shown as f64
 }
 
-/// `input` interpolated by candidate `index` of [`candidates`], with
-/// `fade_jumps` the gaps across which the outline jumps
-/// ([`jumping_gaps`]) filled by each outline fading in place
-/// ([`crate::jump::fade`]) instead: `shape-auto`'s result, and
-/// `image-guided`'s shape prior. Leave-one-out runs measure the candidates
-/// as they are (`fade_jumps` false).
-pub fn fill(index: usize, input: SparseMask<'_>, fade_jumps: bool) -> Result<Mask, InterpError> {
+/// `input` interpolated by candidate `index` of [`candidates`], with the
+/// gaps across which the outline jumps ([`jumping_gaps`]) filled by each
+/// outline fading in place ([`crate::jump::fade`]) by `fade_jumps`
+/// instead: `shape-auto`'s result ([`Fade::Eased`]), and `image-guided`'s
+/// shape prior. Leave-one-out runs measure the candidates as they are
+/// (`fade_jumps` `None`).
+pub fn fill(
+    index: usize,
+    input: SparseMask<'_>,
+    fade_jumps: Option<Fade>,
+) -> Result<Mask, InterpError> {
     let mut out = candidates()[index].interpolate(input)?;
-    if !fade_jumps || candidates()[index].name() == Nearest.name() || pole_fill(index, &input)? {
+    let Some(profile) = fade_jumps else {
+        return Ok(out);
+    };
+    if candidates()[index].name() == Nearest.name() || pole_fill(index, &input)? {
         return Ok(out);
     }
     let plane = Plane::of(&input);
@@ -356,7 +370,7 @@ pub fn fill(index: usize, input: SparseMask<'_>, fade_jumps: bool) -> Result<Mas
     };
     for i in jumping_gaps(&input)? {
         let (a, b) = (input.drawn[i], input.drawn[i + 1]);
-        for (s, slice) in (a + 1..b).zip(fade(&map(a)?, &map(b)?, b - a)) {
+        for (s, slice) in (a + 1..b).zip(fade(&map(a)?, &map(b)?, b - a, profile)) {
             out.set_slice(input.axis, s, &slice)?;
         }
     }
@@ -389,7 +403,7 @@ pub const NESTED: f64 = 0.75;
 /// 0.831 / 0.847 / 0.814, and lung2 at k = 9 (share 0.18, which [`fill`]
 /// copied: 0.503) to 0.716. Outlines that share nothing give the blend
 /// nothing to hold, and each faded where it was traced is as good
-/// (brain1 at k ≥ 5, share 0: 0.432 faded, 0.430 with the profile). An
+/// (brain1 at k ≥ 5, share 0: 0.436 faded, 0.430 with the profile). An
 /// outline that moves between the two slices (a tilted tube) is
 /// `shape-aligned`'s to follow, and `fill` fades its jumps; the pole
 /// profile is not faded over ([`pole_fill`]).
@@ -610,7 +624,7 @@ impl Interpolator for ShapeAuto {
         SdfCache::sharing(input, |input| {
             let index = self.rank(&input)?;
             input.check_cancelled()?;
-            fill(index, input, !self.on_stack)
+            fill(index, input, self.fade())
         })
     }
 
@@ -625,7 +639,7 @@ impl Interpolator for ShapeAuto {
         SdfCache::sharing(input, |input| {
             let choice = self.choose_on(&input, Compact::held_out_to_rank)?;
             input.check_cancelled()?;
-            let mask = fill(choice.index, input, !self.on_stack)?;
+            let mask = fill(choice.index, input, self.fade())?;
             let scale = held_out_scale(&choice, &Plane::of(&input));
             let confidence = shape_confidence(&mask, &input, scale);
             Ok((mask, confidence))
@@ -910,7 +924,7 @@ mod tests {
         assert_eq!(jumps, vec![0]);
         let plane = Plane::of(&SparseMask::new(&far, Axis::Z, &drawn));
         let sdf = |m: &Mask, z: usize| crate::sdf::signed_distance(&at(m, z), &plane);
-        let faded = fade(&sdf(&far, 0), &sdf(&far, 6), 6);
+        let faded = fade(&sdf(&far, 0), &sdf(&far, 6), 6, Fade::Eased);
         for s in 1..6 {
             assert_eq!(at(&out, s), faded[s - 1], "slice {s}");
         }
@@ -935,9 +949,9 @@ mod tests {
         }
         let input = SparseMask::new(&three, Axis::Z, &[0, 6, 12]);
         assert_eq!(jumping_gaps(&input).unwrap(), vec![1]);
-        let out = fill(0, input, true).unwrap();
+        let out = fill(0, input, Some(Fade::Eased)).unwrap();
         assert!(at(&out, 3) != at(&three, 0) && at(&out, 3) != at(&three, 6));
-        let faded = fade(&sdf(&three, 6), &sdf(&three, 12), 6);
+        let faded = fade(&sdf(&three, 6), &sdf(&three, 12), 6, Fade::Eased);
         for s in 7..12 {
             assert_eq!(at(&out, s), faded[s - 7], "slice {s}");
         }

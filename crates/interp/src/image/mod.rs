@@ -54,6 +54,7 @@ pub mod walk;
 use crate::auto::{Choice, ShapeAuto, alone_across, drawn_field, fill, pole_fill};
 use crate::confidence::{best_scale, shape_confidence, sigmoid};
 use crate::crop::{BoxReach, DrawnSlice, LabelBox, drawn_planes};
+use crate::jump::Fade;
 use crate::jump::jumping_gaps;
 use crate::loo::{overlap, pooled_dice};
 use crate::sdf::{FAR, signed_distance};
@@ -931,7 +932,7 @@ impl ImageGuided {
         let mut held_input = SparseMask::new(&sparse, input.axis, &kept);
         held_input.cancel = input.cancel;
         held_input.in_box = input.in_box;
-        let prior = fill(plan.prior, held_input, false)?;
+        let prior = fill(plan.prior, held_input, None)?;
         let flat = IntensityModel::flat();
         let model = plan.model.as_ref().unwrap_or(&flat);
         // The fusion the walk must beat, fitted without the slices it is
@@ -1036,15 +1037,33 @@ impl ImageGuided {
             _ => self.plan(input)?,
         };
         input.check_cancelled()?;
-        let prior = fill(plan.prior, *input, !self.on_stack)?;
+        // The prior the image reads fades the jumps on the straight line
+        // (both outlines' cores on every skipped slice, for the image to
+        // pick); where the shape alone is the result it is `shape-auto`'s,
+        // eased ([`Fade`]).
+        let model = plan.model.as_ref().filter(|_| plan.fuses());
+        let reads_image = plan.walk != Walk::Off || model.is_some();
+        let fade = |profile| (!self.on_stack).then_some(profile);
+        let shape_fade = fade(if reads_image {
+            Fade::Linear
+        } else {
+            Fade::Eased
+        });
+        let prior = fill(plan.prior, *input, shape_fade)?;
         if plan.walk != Walk::Off
             && let Some(walked) = self.run_walk(input, &prior, &plan, confidence)?
         {
             return Ok(walked);
         }
-        let Some(model) = plan.model.as_ref().filter(|_| plan.fuses()) else {
-            let c = confidence.then(|| shape_confidence(&prior, input, plan.scale));
-            return Ok((prior, c));
+        let Some(model) = model else {
+            let shape = if shape_fade == fade(Fade::Eased) {
+                prior
+            } else {
+                // The walk declined the box: the shape alone after all.
+                fill(plan.prior, *input, fade(Fade::Eased))?
+            };
+            let c = confidence.then(|| shape_confidence(&shape, input, plan.scale));
+            return Ok((shape, c));
         };
         let plane = Plane::of(input);
         decide_slices(
@@ -1279,7 +1298,7 @@ impl Interpolator for ImageGuided {
 /// the shape's profile 0.847 and 0.814 to 0.944 and 0.871 (the boxed
 /// walker anchor 0.902 and 0.656), and brain1 at k ≥ 5, a lesion whose
 /// two drawn outlines do not overlap (each copy scores 0, the fusion
-/// 0.41), from the walk's 0.509 to 0.718 (shape 0.432, anchor 0.488).
+/// 0.41), from the walk's 0.509 to 0.718 (shape 0.436, anchor 0.488).
 fn cross_cases<'a>(
     input: &SparseMask<'_>,
     drawn_pairs: &'a [(Vec<bool>, Vec<f32>)],
