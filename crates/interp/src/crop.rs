@@ -218,6 +218,15 @@ pub fn drawn_planes(input: &SparseMask<'_>) -> Result<Vec<Vec<bool>>, InterpErro
 }
 
 impl LabelBox {
+    /// The box that is the whole volume of `geometry` (a result computed on
+    /// the whole volume, painted as a box's).
+    pub fn whole(geometry: &Geometry) -> LabelBox {
+        LabelBox {
+            lo: [0; 3],
+            dims: geometry.dims,
+        }
+    }
+
     /// The boxes to run a label drawn on `slices` (sorted by index) of a
     /// volume of `dims` along `axis` in, for a method that reads as far as
     /// `reach`, smallest first; empty when the label is on no drawn slice,

@@ -1,6 +1,7 @@
 //! Several labels at once: each label is interpolated on its own (labels in
 //! parallel) and the results are painted in ascending label order, so an inner
-//! structure (higher label) overwrites the one that contains it.
+//! structure (higher label) overwrites the one that contains it. Labels traced
+//! side by side split a voxel both claim by depth ([`crate::contest`]).
 //!
 //! A label volume is a painted partition, so the cell's voxels on a drawn
 //! slice are the cell *minus* its nucleus. The outline the person traced is
@@ -12,6 +13,7 @@
 //! A method that reads no further than its tracing's surroundings
 //! ([`Interpolator::box_reach`]) runs on the label's box only
 //! ([`crate::crop`]).
+use crate::contest;
 use crate::crop::{DrawnSlice, LabelBox, drawn_planes, grow_extent};
 use crate::method::WithConfidence;
 use crate::{InterpError, Interpolator, SparseMask};
@@ -158,24 +160,25 @@ fn run<T: Voxel>(
                 )
             })
             .collect();
-        for (&l, r) in labels[first..last].iter().zip(results) {
-            let v = value(l);
+        for (li, r) in (first..last).zip(results) {
+            let v = value(labels[li]);
+            // A lower label painted as `a` that this one was traced inside.
+            let nests = |a: T| {
+                labels[..li]
+                    .iter()
+                    .position(|&k| value(k) == a)
+                    .is_some_and(|outer| planes.nests_in(li, outer))
+            };
             match r? {
                 Piece::Boxed(b, m, c) => {
-                    b.paint(&mut out, &m, v);
+                    contest::paint(&mut out, &b, &m, v, axis, nests);
                     if let (Some(all), Some(c)) = (conf.as_mut(), c) {
                         b.lower(all, &c);
                     }
                 }
                 Piece::Whole(m, c) => {
-                    out.data_mut()
-                        .par_iter_mut()
-                        .zip(m.data().par_iter())
-                        .for_each(|(o, &inside)| {
-                            if inside {
-                                *o = v;
-                            }
-                        });
+                    let b = LabelBox::whole(geometry);
+                    contest::paint(&mut out, &b, &m, v, axis, nests);
                     if let (Some(all), Some(c)) = (conf.as_mut(), c) {
                         all.data_mut()
                             .par_iter_mut()
@@ -509,6 +512,17 @@ impl DrawnLabels {
     fn extent(&self, i: usize, li: usize) -> Option<[usize; 4]> {
         let e = &self.extents[i];
         e.binary_search_by_key(&li, |x| x.0).ok().map(|k| e[k].1)
+    }
+
+    /// Whether label `inner` was traced inside label `outer` (indices in
+    /// [`DrawnLabels::labels`]): on some drawn slice a pixel of `inner`
+    /// lies in `outer`'s whole structure, a hole of it.
+    fn nests_in(&self, inner: usize, outer: usize) -> bool {
+        let label = self.labels[inner];
+        self.traced(outer)
+            .iter()
+            .zip(&self.planes)
+            .any(|(t, p)| t.iter().zip(p).any(|(&t, &l)| t && l == label))
     }
 
     /// The whole structure of label `li` on each drawn slice

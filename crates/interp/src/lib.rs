@@ -10,6 +10,7 @@ pub mod aligned;
 pub mod area_profile;
 pub mod auto;
 pub mod confidence;
+pub mod contest;
 pub mod crop;
 pub mod drawn;
 pub mod image;
