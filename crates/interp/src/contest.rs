@@ -279,4 +279,36 @@ mod tests {
             }
         }
     }
+
+    proptest::proptest! {
+        /// Whatever the two labels' shapes: a voxel claimed by either
+        /// keeps one of them, voxels only the new label claims take it,
+        /// nothing else changes, and a nested label simply overwrites.
+        #[test]
+        fn a_contest_only_ever_chooses_between_the_two_claimants(
+            old in proptest::collection::vec(proptest::prelude::any::<bool>(), 12 * 9 * 3),
+            new in proptest::collection::vec(proptest::prelude::any::<bool>(), 12 * 9 * 3),
+            nested in proptest::prelude::any::<bool>(),
+            axis in 0usize..3,
+            sx in 0.5f64..2.0,
+        ) {
+            let axis = [Axis::X, Axis::Y, Axis::Z][axis];
+            let g = Geometry::new([12, 9, 3], [sx, 1.0, 1.5], LengthUnit::Micrometre).unwrap();
+            let before: Volume<u16> =
+                Volume::from_vec(g.clone(), old.iter().map(|&x| u16::from(x) * 3).collect()).unwrap();
+            let mask: Mask = Volume::from_vec(g.clone(), new).unwrap();
+            let mut out = before.clone();
+            paint(&mut out, &LabelBox::whole(&g), &mask, 5, axis, |_| nested);
+            for ((&b, &m), &o) in before.data().iter().zip(mask.data()).zip(out.data()) {
+                let want_new = m && (b == 0 || nested);
+                if want_new {
+                    proptest::prop_assert_eq!(o, 5);
+                } else if m {
+                    proptest::prop_assert!(o == 5 || o == b);
+                } else {
+                    proptest::prop_assert_eq!(o, b);
+                }
+            }
+        }
+    }
 }
