@@ -17,6 +17,12 @@
 //! (`image-guided` at k = 5: 988 voxels where a voxel of one nucleus was
 //! painted another's). A nucleus seen on one drawn slice, walked from that
 //! slice, lost most of its voxels to a neighbour painted after it.
+//!
+//! Cost: nothing where no two labels' results overlap; otherwise work in
+//! proportion to the voxels claimed twice and small windows around them.
+//! On 200 cells packed edge to edge (a Voronoi partition of 256 × 256 ×
+//! 128, every 4th slice drawn, 42 000 voxels claimed twice) `shape-auto`
+//! took 2.9 s against 2.1 s with the higher label taking every overlap.
 use crate::crop::LabelBox;
 use crate::sdf::signed_distance;
 use crate::slices::Plane;
@@ -27,30 +33,45 @@ use rayon::prelude::*;
 /// box) is inside, except where `out` already holds another label's value
 /// that the voxel lies deeper inside (module doc). `nests(a)`: the label
 /// being painted was traced inside the label painted as `a`, which it then
-/// overwrites as before.
+/// overwrites as before. The work beyond painting is proportional to the
+/// voxels claimed twice and the windows around them.
 pub fn paint<T: Voxel>(
     out: &mut Volume<T>,
     b: &LabelBox,
     mask: &Mask,
     value: T,
     axis: Axis,
-    nests: impl Fn(T) -> bool,
+    mut nests: impl FnMut(T) -> bool,
 ) {
-    let claimed = claimed_values(out, b, mask, value);
-    if claimed.is_empty() {
+    let mut claims = claims_on(out, b, mask, value, axis);
+    let mut values: Vec<T> = Vec::new();
+    for c in &claims {
+        if !values.contains(&c.held) {
+            values.push(c.held);
+        }
+    }
+    values.retain(|&a| !nests(a));
+    claims.retain(|c| values.contains(&c.held));
+    if claims.is_empty() {
         b.paint(out, mask, value);
         return;
     }
-    let contested: Vec<T> = claimed.into_iter().filter(|&a| !nests(a)).collect();
-    if contested.is_empty() {
-        b.paint(out, mask, value);
-        return;
-    }
+    // Decided per slice along the axis, on the volume as it was; then
+    // painted, and the voxels the other values keep restored.
+    claims.sort_unstable_by_key(|c| c.slice);
     let plane = Plane::along(out.geometry(), axis);
-    let d = axis.dim();
-    let kept: Vec<(usize, T)> = (b.lo[d]..b.lo[d] + b.dims[d])
+    let ctx = Slices {
+        volume: out,
+        plane: &plane,
+        b,
+        mask,
+        axis,
+    };
+    let kept: Vec<(usize, T)> = claims
+        .chunk_by(|x, y| x.slice == y.slice)
+        .collect::<Vec<_>>()
         .into_par_iter()
-        .flat_map_iter(|s| kept_on_slice(out, &plane, b, mask, axis, s, &contested))
+        .flat_map_iter(|on_slice| ctx.kept(on_slice))
         .collect();
     b.paint(out, mask, value);
     let data = out.data_mut();
@@ -59,124 +80,218 @@ pub fn paint<T: Voxel>(
     }
 }
 
-/// The voxels of slice `s` (volume index, value) where `mask` claims a
-/// voxel `out` holds one of the `contested` values and the voxel lies
-/// deeper inside that value's region than inside `mask`: they keep it.
-fn kept_on_slice<T: Voxel>(
+/// A voxel of the label's result that `out` holds another value at: its
+/// slice along the axis, in-plane position on the volume's plane, and that
+/// value.
+#[derive(Debug, Clone, Copy)]
+struct Claim<T> {
+    slice: usize,
+    u: usize,
+    v: usize,
+    held: T,
+}
+
+/// Every voxel where `mask` (on box `b`) is inside and `out` holds a value
+/// other than `value` and zero.
+fn claims_on<T: Voxel>(
     out: &Volume<T>,
-    plane: &Plane,
     b: &LabelBox,
     mask: &Mask,
+    value: T,
     axis: Axis,
-    s: usize,
-    contested: &[T],
-) -> Vec<(usize, T)> {
+) -> Vec<Claim<T>> {
     let [gx, gy, _] = out.dims();
     let [nx, ny, _] = b.dims;
     let (ua, va) = axis.in_plane();
     let d = axis.dim();
-    let at = |u: usize, v: usize| {
-        let mut c = [0; 3];
-        c[ua] = u;
-        c[va] = v;
-        c[d] = s;
-        c
-    };
-    let volume_index = |c: [usize; 3]| c[0] + gx * (c[1] + gy * c[2]);
-    let box_index = |c: [usize; 3]| {
-        let r = [c[0] - b.lo[0], c[1] - b.lo[1], c[2] - b.lo[2]];
-        r[0] + nx * (r[1] + ny * r[2])
-    };
     let data = out.data();
-    // The box's part of the slice: the label's pixels, and those others claim.
-    let (u0, nu, v0, nv) = (b.lo[ua], b.dims[ua], b.lo[va], b.dims[va]);
-    let mut inside = vec![false; nu * nv];
-    let mut claims: Vec<(usize, T)> = Vec::new();
-    for v in 0..nv {
-        for u in 0..nu {
-            let c = at(u0 + u, v0 + v);
-            if mask.data()[box_index(c)] {
-                inside[u + nu * v] = true;
-                let o = data[volume_index(c)];
-                if contested.contains(&o) {
-                    claims.push((u + nu * v, o));
-                }
-            }
-        }
-    }
-    if claims.is_empty() {
-        return Vec::new();
-    }
-    let box_plane = Plane {
-        width: nu,
-        height: nv,
-        ..*plane
-    };
-    let own = signed_distance(&inside, &box_plane);
-    // The other label's depth is needed only where it could exceed the
-    // label's own: a window around the box grown by the label's deepest
-    // distance gives it exactly there (a pixel past the window is farther).
-    let deepest = own.iter().fold(0.0f32, |m, &x| m.max(-x));
-    let px = plane.spacing[0].min(plane.spacing[1]) as f32;
-    let g = (deepest / px).ceil() as usize + 1;
-    let (w0, w1) = (u0.saturating_sub(g), (u0 + nu + g).min(plane.width));
-    let (h0, h1) = (v0.saturating_sub(g), (v0 + nv + g).min(plane.height));
-    let window = Plane {
-        width: w1 - w0,
-        height: h1 - h0,
-        ..*plane
-    };
-    let mut kept = Vec::new();
-    for &a in contested {
-        if !claims.iter().any(|&(_, o)| o == a) {
-            continue;
-        }
-        let region: Vec<bool> = (h0..h1)
-            .flat_map(|v| (w0..w1).map(move |u| (u, v)))
-            .map(|(u, v)| data[volume_index(at(u, v))] == a)
-            .collect();
-        let theirs = signed_distance(&region, &window);
-        for &(p, o) in claims.iter().filter(|&&(_, o)| o == a) {
-            let (u, v) = (u0 + p % nu, v0 + p / nu);
-            let q = (u - w0) + window.width * (v - h0);
-            if theirs[q] < own[p] {
-                kept.push((volume_index(at(u, v)), o));
-            }
-        }
-    }
-    kept
-}
-
-/// The values other than `value` and zero that `out` holds where `mask`
-/// is inside, once each.
-fn claimed_values<T: Voxel>(out: &Volume<T>, b: &LabelBox, mask: &Mask, value: T) -> Vec<T> {
-    let [gx, gy, _] = out.dims();
-    let [nx, ny, _] = b.dims;
-    let data = out.data();
-    let found: Vec<Vec<T>> = mask
-        .data()
+    mask.data()
         .par_chunks(nx * ny)
         .enumerate()
-        .map(|(z, plane)| {
-            let mut seen: Vec<T> = Vec::new();
+        .flat_map_iter(|(z, plane)| {
+            let mut found = Vec::new();
             for (j, row) in plane.chunks(nx).enumerate() {
-                let start = b.lo[0] + gx * (b.lo[1] + j + gy * (b.lo[2] + z));
-                for (&inside, &o) in row.iter().zip(&data[start..start + nx]) {
-                    if inside && o != T::default() && o != value && !seen.contains(&o) {
-                        seen.push(o);
+                let (y, z) = (b.lo[1] + j, b.lo[2] + z);
+                let start = b.lo[0] + gx * (y + gy * z);
+                for (i, (&inside, &o)) in row.iter().zip(&data[start..start + nx]).enumerate() {
+                    if inside && o != T::default() && o != value {
+                        let c = [b.lo[0] + i, y, z];
+                        found.push(Claim {
+                            slice: c[d],
+                            u: c[ua],
+                            v: c[va],
+                            held: o,
+                        });
                     }
                 }
             }
-            seen
+            found
         })
-        .collect();
-    let mut all: Vec<T> = Vec::new();
-    for v in found.into_iter().flatten() {
-        if !all.contains(&v) {
-            all.push(v);
+        .collect()
+}
+
+/// What deciding the claims of one slice reads: the volume before the
+/// label was painted, its plane, and the label's result on its box.
+struct Slices<'a, T> {
+    volume: &'a Volume<T>,
+    plane: &'a Plane,
+    b: &'a LabelBox,
+    mask: &'a Mask,
+    axis: Axis,
+}
+
+impl<T: Voxel> Slices<'_, T> {
+    /// Index in the volume of pixel `(u, v)` of slice `s`.
+    fn volume_index(&self, s: usize, u: usize, v: usize) -> usize {
+        let [gx, gy, _] = self.volume.dims();
+        let (ua, va) = self.axis.in_plane();
+        let mut c = [0; 3];
+        (c[ua], c[va], c[self.axis.dim()]) = (u, v, s);
+        c[0] + gx * (c[1] + gy * c[2])
+    }
+
+    /// Whether the label's result holds pixel `(u, v)` of slice `s` (false
+    /// outside its box).
+    fn inside(&self, s: usize, u: usize, v: usize) -> bool {
+        let (ua, va) = self.axis.in_plane();
+        let mut c = [0; 3];
+        (c[ua], c[va], c[self.axis.dim()]) = (u, v, s);
+        let (lo, n) = (self.b.lo, self.b.dims);
+        if (0..3).any(|k| c[k] < lo[k] || c[k] >= lo[k] + n[k]) {
+            return false;
+        }
+        let r = [c[0] - lo[0], c[1] - lo[1], c[2] - lo[2]];
+        self.mask.data()[r[0] + n[0] * (r[1] + n[1] * r[2])]
+    }
+
+    /// The claims of one slice (volume index, value) whose voxel lies
+    /// deeper inside the value's region than inside the label's result:
+    /// the value keeps them.
+    fn kept(&self, claims: &[Claim<T>]) -> Vec<(usize, T)> {
+        let s = claims[0].slice;
+        let own = self.own_depths(claims);
+        let [su, sv] = self.plane.spacing.map(|x| x as f32);
+        let mut kept = Vec::new();
+        let mut values: Vec<T> = claims.iter().map(|c| c.held).collect();
+        values.sort_unstable_by(|a, b| a.to_f64().total_cmp(&b.to_f64()));
+        values.dedup();
+        for a in values {
+            let theirs: Vec<(&Claim<T>, f32)> = claims
+                .iter()
+                .zip(&own)
+                .filter(|(c, _)| c.held == a)
+                .map(|(c, &d)| (c, d))
+                .collect();
+            // The value's depth decides only where it could exceed the
+            // label's own: a window around its claims grown by the
+            // deepest of those gives it exactly there.
+            let deepest = theirs.iter().fold(0.0f32, |m, &(_, d)| m.max(-d));
+            let grow = (deepest / su.min(sv)).ceil() as usize + 1;
+            let window = self.window(theirs.iter().map(|&(c, _)| c), grow);
+            let region: Vec<bool> = window
+                .pixels()
+                .map(|(u, v)| self.volume.data()[self.volume_index(s, u, v)] == a)
+                .collect();
+            let depth = signed_distance(&region, &window.plane);
+            for (c, own) in theirs {
+                if depth[window.index(c.u, c.v)] < own {
+                    kept.push((self.volume_index(s, c.u, c.v), a));
+                }
+            }
+        }
+        kept
+    }
+
+    /// The signed distance of the label's result at each claim, as the
+    /// whole slice's transform gives it, computed on a window around the
+    /// claims only: a pixel's depth is at most the distance to the nearest
+    /// pixel outside along its row or column, and a window grown by the
+    /// largest such bound holds every nearest outside pixel.
+    fn own_depths(&self, claims: &[Claim<T>]) -> Vec<f32> {
+        let s = claims[0].slice;
+        let (w, h) = (self.plane.width, self.plane.height);
+        let [su, sv] = self.plane.spacing.map(|x| x as f32);
+        let out = |path: &mut dyn Iterator<Item = (usize, usize)>| {
+            let mut k = 0.0f32;
+            for (u, v) in path {
+                k += 1.0;
+                if !self.inside(s, u, v) {
+                    return Some(k);
+                }
+            }
+            None
+        };
+        let bound = claims
+            .iter()
+            .map(|c| {
+                let (u, v) = (c.u, c.v);
+                [
+                    out(&mut (0..u).rev().map(|x| (x, v))).map(|k| k * su),
+                    out(&mut (u + 1..w).map(|x| (x, v))).map(|k| k * su),
+                    out(&mut (0..v).rev().map(|y| (u, y))).map(|k| k * sv),
+                    out(&mut (v + 1..h).map(|y| (u, y))).map(|k| k * sv),
+                ]
+                .into_iter()
+                .flatten()
+                .fold(f32::INFINITY, f32::min)
+            })
+            .fold(0.0f32, f32::max);
+        let grow = if bound.is_finite() {
+            (bound / su.min(sv)).ceil() as usize + 1
+        } else {
+            w.max(h)
+        };
+        let window = self.window(claims.iter(), grow);
+        let inside: Vec<bool> = window.pixels().map(|(u, v)| self.inside(s, u, v)).collect();
+        let depth = signed_distance(&inside, &window.plane);
+        claims
+            .iter()
+            .map(|c| depth[window.index(c.u, c.v)])
+            .collect()
+    }
+
+    /// The box of `claims` grown by `grow` pixels, clamped to the plane.
+    fn window<'c>(&self, claims: impl Iterator<Item = &'c Claim<T>>, grow: usize) -> Window
+    where
+        T: 'c,
+    {
+        let (mut u0, mut u1, mut v0, mut v1) = (usize::MAX, 0, usize::MAX, 0);
+        for c in claims {
+            (u0, u1, v0, v1) = (u0.min(c.u), u1.max(c.u), v0.min(c.v), v1.max(c.v));
+        }
+        let (u0, v0) = (u0.saturating_sub(grow), v0.saturating_sub(grow));
+        let u1 = (u1 + 1 + grow).min(self.plane.width);
+        let v1 = (v1 + 1 + grow).min(self.plane.height);
+        Window {
+            u0,
+            v0,
+            plane: Plane {
+                width: u1 - u0,
+                height: v1 - v0,
+                ..*self.plane
+            },
         }
     }
-    all
+}
+
+/// A part of a slice: its first pixel and its plane.
+struct Window {
+    u0: usize,
+    v0: usize,
+    plane: Plane,
+}
+
+impl Window {
+    /// The window's pixels, row by row, as positions on the slice.
+    fn pixels(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (0..self.plane.height)
+            .flat_map(move |v| (0..self.plane.width).map(move |u| (self.u0 + u, self.v0 + v)))
+    }
+
+    /// Index in the window of slice pixel `(u, v)`.
+    fn index(&self, u: usize, v: usize) -> usize {
+        (u - self.u0) + self.plane.width * (v - self.v0)
+    }
 }
 
 #[cfg(test)]

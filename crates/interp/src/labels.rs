@@ -120,6 +120,9 @@ fn run<T: Voxel>(
     }
     let labels = &planes.labels;
     let mut out: Volume<T> = zeros_in_parallel(geometry.clone());
+    // Per label, the labels traced inside it, worked out where a contest
+    // asks ([`DrawnLabels::held_by`]).
+    let mut held: Vec<Option<Vec<u16>>> = vec![None; labels.len()];
     let mut conf: Option<Volume<f32>> =
         confidence.then(|| Volume::filled(geometry.clone(), 1.0f32));
     // With the confidence every label's result is a whole volume of
@@ -167,7 +170,11 @@ fn run<T: Voxel>(
                 labels[..li]
                     .iter()
                     .position(|&k| value(k) == a)
-                    .is_some_and(|outer| planes.nests_in(li, outer))
+                    .is_some_and(|outer| {
+                        held[outer]
+                            .get_or_insert_with(|| planes.held_by(outer))
+                            .contains(&labels[li])
+                    })
             };
             match r? {
                 Piece::Boxed(b, m, c) => {
@@ -514,15 +521,21 @@ impl DrawnLabels {
         e.binary_search_by_key(&li, |x| x.0).ok().map(|k| e[k].1)
     }
 
-    /// Whether label `inner` was traced inside label `outer` (indices in
-    /// [`DrawnLabels::labels`]): on some drawn slice a pixel of `inner`
-    /// lies in `outer`'s whole structure, a hole of it.
-    fn nests_in(&self, inner: usize, outer: usize) -> bool {
-        let label = self.labels[inner];
-        self.traced(outer)
+    /// The labels traced inside label `outer` (an index in
+    /// [`DrawnLabels::labels`]): those with a pixel in `outer`'s whole
+    /// structure, a hole of it, on some drawn slice; ascending.
+    fn held_by(&self, outer: usize) -> Vec<u16> {
+        let own = self.labels[outer];
+        let mut held: Vec<u16> = self
+            .traced(outer)
             .iter()
             .zip(&self.planes)
-            .any(|(t, p)| t.iter().zip(p).any(|(&t, &l)| t && l == label))
+            .flat_map(|(t, p)| t.iter().zip(p).filter(|&(&t, &l)| t && l != own && l != 0))
+            .map(|(_, &l)| l)
+            .collect();
+        held.sort_unstable();
+        held.dedup();
+        held
     }
 
     /// The whole structure of label `li` on each drawn slice
