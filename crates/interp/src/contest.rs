@@ -43,19 +43,15 @@ pub fn paint<T: Voxel>(
     axis: Axis,
     mut nests: impl FnMut(T) -> bool,
 ) {
-    let mut claims = claims_on(out, b, mask, value, axis);
-    let mut values: Vec<T> = Vec::new();
-    for c in &claims {
-        if !values.contains(&c.held) {
-            values.push(c.held);
-        }
-    }
-    values.retain(|&a| !nests(a));
-    claims.retain(|c| values.contains(&c.held));
-    if claims.is_empty() {
+    // The values met first, so that the voxels of a nested label (all of
+    // its result, inside its cell) are never collected one by one.
+    let mut contested = held_under(out, b, mask, value);
+    contested.retain(|&a| !nests(a));
+    if contested.is_empty() {
         b.paint(out, mask, value);
         return;
     }
+    let mut claims = claims_on(out, b, mask, axis, &contested);
     // Decided per slice along the axis, on the volume as it was; then
     // painted, and the voxels the other values keep restored.
     claims.sort_unstable_by_key(|c| c.slice);
@@ -83,51 +79,95 @@ pub fn paint<T: Voxel>(
 /// A voxel of the label's result that `out` holds another value at: its
 /// slice along the axis, in-plane position on the volume's plane, and that
 /// value.
+/// Coordinates are `u32` (a volume's sides are far below that, and a claim
+/// of a wide overlap is one of millions).
 #[derive(Debug, Clone, Copy)]
 struct Claim<T> {
-    slice: usize,
-    u: usize,
-    v: usize,
+    slice: u32,
+    u: u32,
+    v: u32,
     held: T,
 }
 
-/// Every voxel where `mask` (on box `b`) is inside and `out` holds a value
-/// other than `value` and zero.
-fn claims_on<T: Voxel>(
+impl<T> Claim<T> {
+    /// Slice, and in-plane position.
+    fn at(&self) -> (usize, usize, usize) {
+        (self.slice as usize, self.u as usize, self.v as usize)
+    }
+}
+
+/// `visit(voxel, value held)` for every voxel of box `b` where `mask` is
+/// inside, plane by plane (across the box's z) in parallel, each plane's
+/// findings collected by `visit` into its own `Vec`.
+fn under_mask<T: Voxel, F: Send>(
     out: &Volume<T>,
     b: &LabelBox,
     mask: &Mask,
-    value: T,
-    axis: Axis,
-) -> Vec<Claim<T>> {
+    visit: impl Fn(&mut Vec<F>, [usize; 3], T) + Sync,
+) -> Vec<Vec<F>> {
     let [gx, gy, _] = out.dims();
     let [nx, ny, _] = b.dims;
-    let (ua, va) = axis.in_plane();
-    let d = axis.dim();
     let data = out.data();
     mask.data()
         .par_chunks(nx * ny)
         .enumerate()
-        .flat_map_iter(|(z, plane)| {
+        .map(|(z, plane)| {
             let mut found = Vec::new();
             for (j, row) in plane.chunks(nx).enumerate() {
                 let (y, z) = (b.lo[1] + j, b.lo[2] + z);
                 let start = b.lo[0] + gx * (y + gy * z);
                 for (i, (&inside, &o)) in row.iter().zip(&data[start..start + nx]).enumerate() {
-                    if inside && o != T::default() && o != value {
-                        let c = [b.lo[0] + i, y, z];
-                        found.push(Claim {
-                            slice: c[d],
-                            u: c[ua],
-                            v: c[va],
-                            held: o,
-                        });
+                    if inside {
+                        visit(&mut found, [b.lo[0] + i, y, z], o);
                     }
                 }
             }
             found
         })
         .collect()
+}
+
+/// The values other than `value` and zero that `out` holds where `mask`
+/// (on box `b`) is inside, once each.
+fn held_under<T: Voxel>(out: &Volume<T>, b: &LabelBox, mask: &Mask, value: T) -> Vec<T> {
+    let mut all: Vec<T> = Vec::new();
+    let per_plane = under_mask(out, b, mask, |seen: &mut Vec<T>, _, o| {
+        if o != T::default() && o != value && !seen.contains(&o) {
+            seen.push(o);
+        }
+    });
+    for o in per_plane.into_iter().flatten() {
+        if !all.contains(&o) {
+            all.push(o);
+        }
+    }
+    all
+}
+
+/// Every voxel where `mask` (on box `b`) is inside and `out` holds one of
+/// the `contested` values.
+fn claims_on<T: Voxel>(
+    out: &Volume<T>,
+    b: &LabelBox,
+    mask: &Mask,
+    axis: Axis,
+    contested: &[T],
+) -> Vec<Claim<T>> {
+    let (ua, va) = axis.in_plane();
+    let d = axis.dim();
+    under_mask(out, b, mask, |found, c, o| {
+        if o != T::default() && contested.contains(&o) {
+            found.push(Claim {
+                slice: c[d] as u32,
+                u: c[ua] as u32,
+                v: c[va] as u32,
+                held: o,
+            });
+        }
+    })
+    .into_iter()
+    .flatten()
+    .collect()
 }
 
 /// What deciding the claims of one slice reads: the volume before the
@@ -168,7 +208,7 @@ impl<T: Voxel> Slices<'_, T> {
     /// deeper inside the value's region than inside the label's result:
     /// the value keeps them.
     fn kept(&self, claims: &[Claim<T>]) -> Vec<(usize, T)> {
-        let s = claims[0].slice;
+        let s = claims[0].at().0;
         let own = self.own_depths(claims);
         let [su, sv] = self.plane.spacing.map(|x| x as f32);
         let mut kept = Vec::new();
@@ -194,8 +234,9 @@ impl<T: Voxel> Slices<'_, T> {
                 .collect();
             let depth = signed_distance(&region, &window.plane);
             for (c, own) in theirs {
-                if depth[window.index(c.u, c.v)] < own {
-                    kept.push((self.volume_index(s, c.u, c.v), a));
+                let (_, u, v) = c.at();
+                if depth[window.index(u, v)] < own {
+                    kept.push((self.volume_index(s, u, v), a));
                 }
             }
         }
@@ -208,7 +249,7 @@ impl<T: Voxel> Slices<'_, T> {
     /// pixel outside along its row or column, and a window grown by the
     /// largest such bound holds every nearest outside pixel.
     fn own_depths(&self, claims: &[Claim<T>]) -> Vec<f32> {
-        let s = claims[0].slice;
+        let s = claims[0].at().0;
         let (w, h) = (self.plane.width, self.plane.height);
         let [su, sv] = self.plane.spacing.map(|x| x as f32);
         let out = |path: &mut dyn Iterator<Item = (usize, usize)>| {
@@ -224,7 +265,7 @@ impl<T: Voxel> Slices<'_, T> {
         let bound = claims
             .iter()
             .map(|c| {
-                let (u, v) = (c.u, c.v);
+                let (_, u, v) = c.at();
                 [
                     out(&mut (0..u).rev().map(|x| (x, v))).map(|k| k * su),
                     out(&mut (u + 1..w).map(|x| (x, v))).map(|k| k * su),
@@ -246,7 +287,10 @@ impl<T: Voxel> Slices<'_, T> {
         let depth = signed_distance(&inside, &window.plane);
         claims
             .iter()
-            .map(|c| depth[window.index(c.u, c.v)])
+            .map(|c| {
+                let (_, u, v) = c.at();
+                depth[window.index(u, v)]
+            })
             .collect()
     }
 
@@ -257,7 +301,8 @@ impl<T: Voxel> Slices<'_, T> {
     {
         let (mut u0, mut u1, mut v0, mut v1) = (usize::MAX, 0, usize::MAX, 0);
         for c in claims {
-            (u0, u1, v0, v1) = (u0.min(c.u), u1.max(c.u), v0.min(c.v), v1.max(c.v));
+            let (_, u, v) = c.at();
+            (u0, u1, v0, v1) = (u0.min(u), u1.max(u), v0.min(v), v1.max(v));
         }
         let (u0, v0) = (u0.saturating_sub(grow), v0.saturating_sub(grow));
         let u1 = (u1 + 1 + grow).min(self.plane.width);
