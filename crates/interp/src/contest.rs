@@ -153,14 +153,13 @@ fn claims_on<T: Voxel>(
     axis: Axis,
     contested: &[T],
 ) -> Vec<Claim<T>> {
-    let (ua, va) = axis.in_plane();
-    let d = axis.dim();
     under_mask(out, b, mask, |found, c, o| {
         if o != T::default() && contested.contains(&o) {
+            let (slice, u, v) = axis.split(c);
             found.push(Claim {
-                slice: c[d] as u32,
-                u: c[ua] as u32,
-                v: c[va] as u32,
+                slice: slice as u32,
+                u: u as u32,
+                v: v as u32,
                 held: o,
             });
         }
@@ -183,19 +182,14 @@ struct Slices<'a, T> {
 impl<T: Voxel> Slices<'_, T> {
     /// Index in the volume of pixel `(u, v)` of slice `s`.
     fn volume_index(&self, s: usize, u: usize, v: usize) -> usize {
-        let [gx, gy, _] = self.volume.dims();
-        let (ua, va) = self.axis.in_plane();
-        let mut c = [0; 3];
-        (c[ua], c[va], c[self.axis.dim()]) = (u, v, s);
-        c[0] + gx * (c[1] + gy * c[2])
+        let [i, j, k] = self.axis.voxel(s, u, v);
+        self.volume.geometry().index(i, j, k)
     }
 
     /// Whether the label's result holds pixel `(u, v)` of slice `s` (false
     /// outside its box).
     fn inside(&self, s: usize, u: usize, v: usize) -> bool {
-        let (ua, va) = self.axis.in_plane();
-        let mut c = [0; 3];
-        (c[ua], c[va], c[self.axis.dim()]) = (u, v, s);
+        let c = self.axis.voxel(s, u, v);
         let (lo, n) = (self.b.lo, self.b.dims);
         if (0..3).any(|k| c[k] < lo[k] || c[k] >= lo[k] + n[k]) {
             return false;

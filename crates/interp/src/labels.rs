@@ -176,23 +176,13 @@ fn run<T: Voxel>(
                             .contains(&labels[li])
                     })
             };
-            match r? {
-                Piece::Boxed(b, m, c) => {
-                    contest::paint(&mut out, &b, &m, v, axis, nests);
-                    if let (Some(all), Some(c)) = (conf.as_mut(), c) {
-                        b.lower(all, &c);
-                    }
-                }
-                Piece::Whole(m, c) => {
-                    let b = LabelBox::whole(geometry);
-                    contest::paint(&mut out, &b, &m, v, axis, nests);
-                    if let (Some(all), Some(c)) = (conf.as_mut(), c) {
-                        all.data_mut()
-                            .par_iter_mut()
-                            .zip(c.data().par_iter())
-                            .for_each(|(a, &x)| *a = a.min(x));
-                    }
-                }
+            let (b, m, c) = match r? {
+                Piece::Boxed(b, m, c) => (b, m, c),
+                Piece::Whole(m, c) => (LabelBox::whole(geometry), m, c),
+            };
+            contest::paint(&mut out, &b, &m, v, axis, nests);
+            if let (Some(all), Some(c)) = (conf.as_mut(), c) {
+                b.lower(all, &c);
             }
         }
     }

@@ -1051,23 +1051,24 @@ impl ImageGuided {
         let model = plan.model.as_ref().filter(|_| plan.fuses());
         let reads_image = plan.walk != Walk::Off || model.is_some();
         let fade = |profile| (!self.on_stack).then_some(profile);
-        let shape_fade = fade(if reads_image {
-            Fade::Linear
+        let eased = fade(Fade::Eased);
+        let prior_fade = if reads_image {
+            fade(Fade::Linear)
         } else {
-            Fade::Eased
-        });
-        let prior = fill(plan.prior, *input, shape_fade)?;
+            eased
+        };
+        let prior = fill(plan.prior, *input, prior_fade)?;
         if plan.walk != Walk::Off
             && let Some(walked) = self.run_walk(input, &prior, &plan, confidence)?
         {
             return Ok(walked);
         }
         let Some(model) = model else {
-            let shape = if shape_fade == fade(Fade::Eased) {
+            let shape = if prior_fade == eased {
                 prior
             } else {
                 // The walk declined the box: the shape alone after all.
-                fill(plan.prior, *input, fade(Fade::Eased))?
+                fill(plan.prior, *input, eased)?
             };
             let c = confidence.then(|| shape_confidence(&shape, input, plan.scale));
             return Ok((shape, c));
