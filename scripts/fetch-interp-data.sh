@@ -10,8 +10,11 @@
 #     (CT lung1/lung2 in HU with lesion labels, MR brain1/brain2/breast1)
 #   insighttoolkit5-examples (Debian): KmeansTest_T1UCharRaw.nii.gz and its
 #     k-means segmentation KmeansTest_T1KmeansPrelimSegmentation.nii.gz
+#   nilearn 0.10.3 wheel (PyPI): the MNI ICBM152 2009a template bundled with it,
+#     T1 and grey / white matter probability maps, 197x233x189 at 1 mm
+#     (nilearn/datasets/data/mni_icbm152_{t1,gm,wm}_tal_nlin_sym_09a_converted.nii.gz)
 #
-# Usage: scripts/fetch-interp-data.sh [--only stardist|pyradiomics|itk]...
+# Usage: scripts/fetch-interp-data.sh [--only stardist|pyradiomics|itk|mni]...
 set -euo pipefail
 target="${CARGO_TARGET_DIR:-target}"
 cache="$target/interp-data"
@@ -24,7 +27,7 @@ declare -A want=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --only) want["$2"]=1; want_all=0; shift 2 ;;
-    *) echo "usage: $0 [--only stardist|pyradiomics|itk]..." >&2; exit 2 ;;
+    *) echo "usage: $0 [--only stardist|pyradiomics|itk|mni]..." >&2; exit 2 ;;
   esac
 done
 wanted() { [ "$want_all" = 1 ] || [ -n "${want[$1]:-}" ]; }
@@ -35,6 +38,8 @@ RADIOMICS_TGZ="pyradiomics-3.1.0.tar.gz"
 RADIOMICS_SHA="24722c962a6bbd09bc39c1c67dbffe92435f9692a421fabaae8a6b4511eb48e4"
 ITK_DEB="insighttoolkit5-examples_5.2.1-5+deb12u1_all.deb"
 ITK_SHA="6ca1f323eac0b3cba50e786bbf0f2c76ed44b52ecb9e7aeea808ccc42bf09f69"
+NILEARN_WHL="nilearn-0.10.3-py3-none-any.whl"
+NILEARN_SHA="353bc3c4a73b20ade1d6a35287236c9cccd4f293f9aed75c4fc37110c02ebbb5"
 
 check() { # file sha
   local got
@@ -98,6 +103,24 @@ if wanted itk && [ ! -f "$cache/itk/T1_kmeans.nii.gz" ]; then
   mv "$cache/itk.tmp/$d/KmeansTest_T1KmeansPrelimSegmentation.nii.gz" "$cache/itk.tmp/T1_kmeans.nii.gz"
   rm -rf "$cache/itk.tmp/usr"
   rm -rf "$cache/itk" && mv "$cache/itk.tmp" "$cache/itk"
+fi
+
+if wanted mni && [ ! -f "$cache/mni/wm.nii.gz" ]; then
+  if [ ! -f "$dl/$NILEARN_WHL" ]; then
+    python3 -m pip download -q --disable-pip-version-check --no-deps \
+      --only-binary=:all: nilearn==0.10.3 -d "$dl" >/dev/null 2>&1 || unreachable "nilearn==0.10.3"
+  fi
+  check "$dl/$NILEARN_WHL" "$NILEARN_SHA"
+  rm -rf "$cache/mni.tmp" && mkdir -p "$cache/mni.tmp"
+  python3 - "$dl/$NILEARN_WHL" "$cache/mni.tmp" <<'EOF'
+import sys, zipfile
+z = zipfile.ZipFile(sys.argv[1])
+for name in ("t1", "gm", "wm"):
+    src = f"nilearn/datasets/data/mni_icbm152_{name}_tal_nlin_sym_09a_converted.nii.gz"
+    with open(f"{sys.argv[2]}/{name}.nii.gz", "wb") as f:
+        f.write(z.read(src))
+EOF
+  rm -rf "$cache/mni" && mv "$cache/mni.tmp" "$cache/mni"
 fi
 
 echo "$cache"

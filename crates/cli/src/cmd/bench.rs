@@ -10,12 +10,13 @@
 //! (`scripts/fetch-interp-data.sh` prints DIR): the noisy phantom (generated),
 //! stardist's synthetic 3D nuclei (as one mask, and as a label volume scored
 //! by the label-matched Dice), pyradiomics' CT and MR cases and ITK's T1
-//! with its k-means classes; a family whose files are missing is skipped with
+//! with its k-means classes, and the MNI template's T1 with its grey and white
+//! matter (the classes more likely than not); a family whose files are missing is skipped with
 //! a note. `--speed` times the methods on phantom cells of 256×256×60 and
 //! 197×233×189 voxels instead.
 use anyhow::{Context, Result, bail};
 use interslice_core::phantom::{PhantomParams, generate};
-use interslice_core::{Axis, LabelVolume, Mask, Volume};
+use interslice_core::{AnyVolume, Axis, LabelVolume, Mask, Volume};
 use interslice_interp::image::walk::RandomWalk;
 use interslice_interp::image::{Conditioned, ImageGuided, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, score, score_labels};
@@ -243,7 +244,37 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             itk.display()
         );
     }
+    let mni = dir.join("mni");
+    if mni.join("wm.nii.gz").is_file() {
+        let t1 = interslice_io::read_volume(&mni.join("t1.nii.gz"))?;
+        let img = Arc::new(intensity_f32(&t1));
+        for (class, name) in [("gm", "mni-grey"), ("wm", "mni-white")] {
+            let path = mni.join(format!("{class}.nii.gz"));
+            let mask = tissue_of(&interslice_io::read_volume(&path)?);
+            if mask.dims() != img.dims() {
+                bail!("{}: dims differ from the MNI T1's", path.display());
+            }
+            cases.push(cropped(
+                "MNI grey / white matter",
+                name.into(),
+                Truth::Mask(mask),
+                Some(&img),
+            )?);
+        }
+    } else {
+        eprintln!(
+            "bench: no {} (run scripts/fetch-interp-data.sh)",
+            mni.display()
+        );
+    }
     Ok(cases)
+}
+
+/// A tissue class of the MNI template: the voxels whose probability map
+/// (0..255 for 0..1) says it more likely than not (at most one class each,
+/// since the maps sum to at most 1).
+fn tissue_of(prob: &AnyVolume) -> Mask {
+    intensity_f32(prob).map(|p| p > 127.5)
 }
 
 /// The intensity volume at `path`, which must share the labels' dims.
