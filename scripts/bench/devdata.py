@@ -14,9 +14,10 @@ import interslice
 MARGIN = 8
 
 
-def cases(data, t1):
+def cases(data, t1, mni=False):
     """(name, mask, image) of every development mask with an image, as
-    `interslice bench` names them (the T1 classes only with `t1`)."""
+    `interslice bench` names them (the T1 classes only with `t1`, the MNI
+    template's grey and white matter only with `mni`)."""
     sd = data / "stardist"
     if (sd / "mask3d.tif").is_file():
         lab, _ = interslice.read(sd / "mask3d.tif")
@@ -34,6 +35,13 @@ def cases(data, t1):
         img, _ = interslice.read(itk / "T1.nii.gz")
         for c in sorted(set(np.unique(lab)) - {0}):
             yield f"T1-class{c}", lab == c, img
+    tpl = data / "mni"
+    if mni and (tpl / "wm.nii.gz").is_file():
+        img, _ = interslice.read(tpl / "t1.nii.gz")
+        for cls, name in [("gm", "mni-grey"), ("wm", "mni-white")]:
+            prob, _ = interslice.read(tpl / f"{cls}.nii.gz")
+            # As `interslice bench`: more likely than not (0..255 for 0..1).
+            yield name, prob.astype(np.float32) > 127.5, img
 
 
 def cropped(mask, img):
