@@ -13,8 +13,12 @@
 #   nilearn 0.10.3 wheel (PyPI): the MNI ICBM152 2009a template bundled with it,
 #     T1 and grey / white matter probability maps, 197x233x189 at 1 mm
 #     (nilearn/datasets/data/mni_icbm152_{t1,gm,wm}_tal_nlin_sym_09a_converted.nii.gz)
+#   mricron-data (Debian): the AAL atlas (Tzourio-Mazoyer et al. 2002), brain
+#     structures delineated by hand on the T1 of one subject (the MNI "colin27"
+#     single subject, ch2), with that T1, both 181x217x181 at 1 mm
+#     (usr/share/mricron/templates/aal.nii.gz, ch2.nii.gz)
 #
-# Usage: scripts/fetch-interp-data.sh [--only stardist|pyradiomics|itk|mni]...
+# Usage: scripts/fetch-interp-data.sh [--only stardist|pyradiomics|itk|mni|aal]...
 set -euo pipefail
 target="${CARGO_TARGET_DIR:-target}"
 cache="$target/interp-data"
@@ -27,7 +31,7 @@ declare -A want=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --only) want["$2"]=1; want_all=0; shift 2 ;;
-    *) echo "usage: $0 [--only stardist|pyradiomics|itk|mni]..." >&2; exit 2 ;;
+    *) echo "usage: $0 [--only stardist|pyradiomics|itk|mni|aal]..." >&2; exit 2 ;;
   esac
 done
 wanted() { [ "$want_all" = 1 ] || [ -n "${want[$1]:-}" ]; }
@@ -40,6 +44,9 @@ ITK_DEB="insighttoolkit5-examples_5.2.1-5+deb12u1_all.deb"
 ITK_SHA="6ca1f323eac0b3cba50e786bbf0f2c76ed44b52ecb9e7aeea808ccc42bf09f69"
 NILEARN_WHL="nilearn-0.10.3-py3-none-any.whl"
 NILEARN_SHA="353bc3c4a73b20ade1d6a35287236c9cccd4f293f9aed75c4fc37110c02ebbb5"
+MRICRON_VERSION="1.2.20211006+dfsg-4"
+MRICRON_DEB="mricron-data_${MRICRON_VERSION}_all.deb"
+MRICRON_SHA="d40aa0ed66cf89bf6cafa049ad3884703c9d975c2ee2737525b7196528df9d6f"
 
 check() { # file sha
   local got
@@ -87,13 +94,17 @@ if wanted pyradiomics && [ ! -f "$cache/pyradiomics/lung2_label.nrrd" ]; then
   rm -rf "$cache/pyradiomics" && mv "$cache/pyradiomics.tmp" "$cache/pyradiomics"
 fi
 
+# A Debian package pinned to its version, into the downloads; a fresh
+# machine has no package lists yet: as root, they are fetched once.
+get_deb() { # package=version
+  (cd "$dl" && apt-get download "$1" >/dev/null 2>&1) \
+    || { [ "$(id -u)" = 0 ] && apt-get update -qq >/dev/null 2>&1 \
+      && (cd "$dl" && apt-get download "$1" >/dev/null 2>&1); } \
+    || unreachable "${1%%=*} (run apt-get update first)"
+}
+
 if wanted itk && [ ! -f "$cache/itk/T1_kmeans.nii.gz" ]; then
-  if [ ! -f "$dl/$ITK_DEB" ]; then
-    get_deb() { (cd "$dl" && apt-get download "insighttoolkit5-examples=5.2.1-5+deb12u1" >/dev/null 2>&1); }
-    # A fresh machine has no package lists yet: as root, fetch them once.
-    get_deb || { [ "$(id -u)" = 0 ] && apt-get update -qq >/dev/null 2>&1 && get_deb; } \
-      || unreachable "insighttoolkit5-examples (run apt-get update first)"
-  fi
+  [ -f "$dl/$ITK_DEB" ] || get_deb "insighttoolkit5-examples=5.2.1-5+deb12u1"
   check "$dl/$ITK_DEB" "$ITK_SHA"
   rm -rf "$cache/itk.tmp" && mkdir -p "$cache/itk.tmp"
   d=./usr/share/doc/insighttoolkit5-examples/examples/Data
@@ -121,6 +132,18 @@ for name in ("t1", "gm", "wm"):
         f.write(z.read(src))
 EOF
   rm -rf "$cache/mni" && mv "$cache/mni.tmp" "$cache/mni"
+fi
+
+if wanted aal && [ ! -f "$cache/aal/aal.nii.gz" ]; then
+  [ -f "$dl/$MRICRON_DEB" ] || get_deb "mricron-data=$MRICRON_VERSION"
+  check "$dl/$MRICRON_DEB" "$MRICRON_SHA"
+  rm -rf "$cache/aal.tmp" && mkdir -p "$cache/aal.tmp"
+  d=./usr/share/mricron/templates
+  dpkg-deb --fsys-tarfile "$dl/$MRICRON_DEB" | tar -x -C "$cache/aal.tmp" \
+    "$d/aal.nii.gz" "$d/ch2.nii.gz"
+  mv "$cache/aal.tmp/$d/aal.nii.gz" "$cache/aal.tmp/$d/ch2.nii.gz" "$cache/aal.tmp/"
+  rm -rf "$cache/aal.tmp/usr"
+  rm -rf "$cache/aal" && mv "$cache/aal.tmp" "$cache/aal"
 fi
 
 echo "$cache"

@@ -14,10 +14,19 @@ import interslice
 MARGIN = 8
 
 
-def cases(data, t1, mni=False):
+# The AAL structures of `interslice bench` (its `AAL_STRUCTURES`).
+AAL_STRUCTURES = [
+    (37, "hippocampus-l"), (38, "hippocampus-r"), (41, "amygdala-l"), (42, "amygdala-r"),
+    (71, "caudate-l"), (72, "caudate-r"), (73, "putamen-l"), (74, "putamen-r"),
+    (75, "pallidum-l"), (76, "pallidum-r"), (77, "thalamus-l"), (78, "thalamus-r"),
+]
+
+
+def cases(data, t1, mni=False, aal=False):
     """(name, mask, image) of every development mask with an image, as
     `interslice bench` names them (the T1 classes only with `t1`, the MNI
-    template's grey and white matter only with `mni`)."""
+    template's grey and white matter only with `mni`, the AAL structures
+    only with `aal`)."""
     sd = data / "stardist"
     if (sd / "mask3d.tif").is_file():
         lab, _ = interslice.read(sd / "mask3d.tif")
@@ -42,6 +51,12 @@ def cases(data, t1, mni=False):
             prob, _ = interslice.read(tpl / f"{cls}.nii.gz")
             # As `interslice bench`: more likely than not (0..255 for 0..1).
             yield name, prob.astype(np.float32) > 127.5, img
+    atlas = data / "aal"
+    if aal and (atlas / "aal.nii.gz").is_file():
+        lab, _ = interslice.read(atlas / "aal.nii.gz")
+        img, _ = interslice.read(atlas / "ch2.nii.gz")
+        for label, name in AAL_STRUCTURES:
+            yield f"aal-{name}", lab == label, img
 
 
 def cropped(mask, img):

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """ITK's morphological contour interpolation (MCI) as an anchor of `interslice bench`.
 
-Usage: mci_anchor.py [--data DIR] [--skips 1,3,5,9] [--t1] [--mni] [--against BENCH.json]
+Usage: mci_anchor.py [--data DIR] [--skips 1,3,5,9] [--t1] [--mni] [--aal] [--against BENCH.json]
 
 Runs `itk.morphological_contour_interpolator` (pip packages `itk` and
 `itk-morphologicalcontourinterpolation`; Albu et al. 2008, Zukić et al.
@@ -38,13 +38,14 @@ def main():
     ap.add_argument("--skips", default="1,3,5,9")
     ap.add_argument("--t1", action="store_true", help="also the T1 k-means classes")
     ap.add_argument("--mni", action="store_true", help="also the MNI grey and white matter")
+    ap.add_argument("--aal", action="store_true", help="also the AAL structures")
     ap.add_argument("--against", type=Path, help="JSON rows of `interslice bench --per-mask --json`")
     args = ap.parse_args()
     skips = [int(k) for k in args.skips.split(",")]
     print(f"| mask | {' | '.join(f'k={k}' for k in skips)} | s/run |")
     print(f"|---|{'---|' * len(skips)}---|")
     anchor = {}
-    for name, mask, img in cases(args.data, args.t1, args.mni):
+    for name, mask, img in cases(args.data, args.t1, args.mni, args.aal):
         mask, _ = cropped(mask, img)
         scores, secs = [], []
         for k in skips:

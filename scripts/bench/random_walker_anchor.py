@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The random-walker anchor on the development data, for `interslice bench`.
 
-Usage: random_walker_anchor.py [--data DIR] [--skips 1,3,5,9] [--beta 130] [--t1] [--mni]
+Usage: random_walker_anchor.py [--data DIR] [--skips 1,3,5,9] [--beta 130] [--t1] [--mni] [--aal]
 
 Runs scikit-image's `random_walker` on the intensity volume, seeded by the
 drawn slices (inside the tracing: label 1, the rest of each drawn slice:
@@ -34,11 +34,12 @@ def main():
     ap.add_argument("--beta", type=float, default=130.0, help="random_walker's beta (its default)")
     ap.add_argument("--t1", action="store_true", help="also the T1 k-means classes (slow)")
     ap.add_argument("--mni", action="store_true", help="also the MNI grey and white matter (slow)")
+    ap.add_argument("--aal", action="store_true", help="also the AAL structures")
     args = ap.parse_args()
     skips = [int(k) for k in args.skips.split(",")]
     print(f"| mask | {' | '.join(f'k={k}' for k in skips)} | s/run |")
     print(f"|---|{'---|' * len(skips)}---|")
-    for name, mask, img in cases(args.data, args.t1, args.mni):
+    for name, mask, img in cases(args.data, args.t1, args.mni, args.aal):
         mask, img = cropped(mask, img)
         img = (img - img.mean()) / (img.std() + 1e-9)
         scores, secs = [], []

@@ -10,9 +10,11 @@
 //! (`scripts/fetch-interp-data.sh` prints DIR): the noisy phantom (generated),
 //! stardist's synthetic 3D nuclei (as one mask, and as a label volume scored
 //! by the label-matched Dice), pyradiomics' CT and MR cases and ITK's T1
-//! with its k-means classes, and the MNI template's T1 with its grey and white
-//! matter (the classes more likely than not); a family whose files are missing is skipped with
-//! a note. `--speed` times the methods on phantom cells of 256×256×60 and
+//! with its k-means classes, the MNI template's T1 with its grey and white
+//! matter (the classes more likely than not), and twelve deep grey and medial
+//! temporal structures of the AAL atlas, traced by hand on the T1 of one
+//! subject ([`AAL_STRUCTURES`]); a family whose files are missing is skipped
+//! with a note. `--speed` times the methods on phantom cells of 256×256×60 and
 //! 197×233×189 voxels instead.
 use anyhow::{Context, Result, bail};
 use interslice_core::phantom::{PhantomParams, generate};
@@ -267,8 +269,46 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             mni.display()
         );
     }
+    let aal = dir.join("aal");
+    if aal.join("aal.nii.gz").is_file() {
+        let labels = interslice_io::read_labels(&aal.join("aal.nii.gz"))?;
+        let img = Arc::new(read_on_grid(&aal.join("ch2.nii.gz"), &labels)?);
+        for (id, name) in AAL_STRUCTURES {
+            cases.push(cropped(
+                "AAL structures traced by hand on a T1",
+                format!("aal-{name}"),
+                Truth::Mask(labels.mask_of(id)),
+                Some(&img),
+            )?);
+        }
+    } else {
+        eprintln!(
+            "bench: no {} (run scripts/fetch-interp-data.sh)",
+            aal.display()
+        );
+    }
     Ok(cases)
 }
+
+/// The structures of the AAL atlas (Tzourio-Mazoyer et al. 2002, labels of
+/// `aal.nii.gz`) benchmarked on the T1 they were delineated on: the deep
+/// grey and medial temporal structures of both sides, small structures
+/// traced by hand on a T1 with weak contrast at parts of their boundary
+/// (the held-out family the random walker loses on).
+pub const AAL_STRUCTURES: [(u16, &str); 12] = [
+    (37, "hippocampus-l"),
+    (38, "hippocampus-r"),
+    (41, "amygdala-l"),
+    (42, "amygdala-r"),
+    (71, "caudate-l"),
+    (72, "caudate-r"),
+    (73, "putamen-l"),
+    (74, "putamen-r"),
+    (75, "pallidum-l"),
+    (76, "pallidum-r"),
+    (77, "thalamus-l"),
+    (78, "thalamus-r"),
+];
 
 /// A tissue class of the MNI template: the voxels whose probability map
 /// (0..255 for 0..1) says it more likely than not (at most one class each,
