@@ -88,6 +88,33 @@ pub struct Choice {
     /// holds predictions across the structure's ends, which do not judge an
     /// image fit either (the image method keeps the shape).
     pub thin: bool,
+    /// Where `shape-area` was taken by rule on too few held-out slices of a
+    /// structure that spans the traced range ([`FEW_HELD_OUT`]): the
+    /// candidate the leave-one-out ranked first, with its predictions,
+    /// which the image method reads the image with ([`Choice::ranked_first`]).
+    pub ranked: Option<(usize, Vec<HeldOut>)>,
+    /// Whether fewer than [`FEW_HELD_OUT`] held-out slices lie between two
+    /// that show the structure (and its outline does not drift steadily):
+    /// `shape-area` fills it by rule.
+    pub few: bool,
+}
+
+impl Choice {
+    /// The index `shape-auto` fills with, and the choice with the
+    /// leave-one-out's own pick in its place where `shape-area` was taken
+    /// by rule ([`Choice::ranked`]): the image method's prior. Why: its fit
+    /// and walks read the image around that pick's predictions of the
+    /// held-out slices, and with the rule's prior instead they lost where
+    /// the image shows the edge (lung2 at k = 5–8 −0.019 to −0.13, brain1
+    /// at k = 2 −0.22 on the skipped slices of `interslice bench`).
+    pub fn ranked_first(mut self) -> (usize, Choice) {
+        let shape = self.index;
+        if let Some((index, held)) = self.ranked.take() {
+            self.index = index;
+            self.held = held;
+        }
+        (shape, self)
+    }
 }
 
 impl ShapeAuto {
@@ -111,8 +138,8 @@ impl ShapeAuto {
     /// every candidate (on stardist's nuclei as a label volume at k = 9,
     /// where most nuclei show on one drawn slice, those zeros had drowned
     /// the slices next to them: 0.6310 → 0.6518). With fewer than
-    /// [`FEW_HELD_OUT`] such slices, an object that ends inside the traced
-    /// range (`ends_inside`) takes `shape-area`.
+    /// [`FEW_HELD_OUT`] such slices (but one or more, or an object that
+    /// ends inside the traced range, `ends_inside`) `shape-area` is taken.
     pub fn choose(&self, input: &SparseMask<'_>) -> Result<Choice, InterpError> {
         self.choose_on(input, Compact::held_out)
     }
@@ -161,6 +188,8 @@ impl ShapeAuto {
                 held: Vec::new(),
                 compact,
                 thin: false,
+                ranked: None,
+                few: false,
             });
         }
         // Kept: the held-out slices beside one that shows the structure (what
@@ -185,7 +214,8 @@ impl ShapeAuto {
         let telling = (1..shows.len().saturating_sub(1))
             .filter(|&p| interior(&shows, p))
             .count();
-        if telling < FEW_HELD_OUT && ends_inside(&shows) && drifting_gaps(input)?.is_empty() {
+        let few = telling < FEW_HELD_OUT && drifting_gaps(input)?.is_empty();
+        if few && ends_inside(&shows) {
             let index = position_of(ShapeArea::default().name());
             return Ok(Choice {
                 index,
@@ -193,6 +223,8 @@ impl ShapeAuto {
                 scores: Vec::new(),
                 compact,
                 thin: true,
+                ranked: None,
+                few: true,
             });
         }
         if telling == 0 || preds.iter().all(Vec::is_empty) {
@@ -204,11 +236,21 @@ impl ShapeAuto {
                 held: Vec::new(),
                 compact,
                 thin: false,
+                ranked: None,
+                few: false,
             });
         }
-        let index = match self.extrapolated(&compact, input, &scores)? {
+        let ranked = match self.extrapolated(&compact, input, &scores)? {
             Some(errors) => preferred(&errors.iter().map(|e| -e).collect::<Vec<_>>()),
             None => preferred(&scores),
+        };
+        let area = position_of(ShapeArea::default().name());
+        let (index, ranked) = if few && ranked != area {
+            // See `FEW_HELD_OUT`; the pick is kept for the image method.
+            let held = std::mem::take(&mut preds[ranked]);
+            (area, Some((ranked, held)))
+        } else {
+            (ranked, None)
         };
         let held = preds.swap_remove(index);
         Ok(Choice {
@@ -217,6 +259,8 @@ impl ShapeAuto {
             held,
             compact,
             thin: false,
+            ranked,
+            few,
         })
     }
 }
@@ -486,8 +530,26 @@ fn interior(shows: &[bool], pos: usize) -> bool {
 /// alone 0.9231 / 0.8785 / 0.8100 / 0.7538 / 0.6820 / 0.6416 / 0.5104 /
 /// 0.5246; since `shape-area`'s pole profile keeps to two drawn slices and
 /// nothing beyond, k = 5 and 7 are 0.7171 and 0.5495); fewer than 2 between
-/// the two. Every other mask of the benchmark is traced from its first to
-/// its last slice (no end inside the range) and is untouched.
+/// the two.
+///
+/// A structure traced from its first to its last slice with one or two
+/// such slices takes `shape-area` too, for the same reason: one or two
+/// held-out slices, each predicted across twice the gap from slices near
+/// the structure's ends, rank the candidates by noise. On the AAL
+/// structures of the benchmark (deep grey and medial temporal structures
+/// traced by hand on a T1, 3–4 drawn slices from k = 4 to 9) the
+/// leave-one-out picked `shape-aligned` on one held-out slice where it
+/// lost by up to 0.13 (pallidum-l at k = 6–9: 0.7944 / 0.7669 / 0.7103 /
+/// 0.6607 → 0.8318 / 0.8325 / 0.8104 / 0.7911; pallidum-r at k = 5–9 +0.011
+/// to +0.040, thalamus-l at k = 9 +0.018, amygdala-r at k = 9 +0.016);
+/// the family's mean at k = 6 / 7 / 8 / 9 went from 0.8642 / 0.8462 /
+/// 0.8224 / 0.7996 to 0.8696 / 0.8530 / 0.8335 / 0.8148. It cost amygdala-l
+/// at k = 9 0.022 and lung2 (a CT lesion longer than wide, 3 drawn slices
+/// at k = 6 and 7) 0.018 and 0.020, where `shape-aligned` led, and gained
+/// lung2 at k = 4 0.025 and brain1 at k = 1 and 3 0.036 and 0.013. The
+/// image method keeps the leave-one-out's pick as its prior there
+/// ([`Choice::ranked_first`]). With no such slice at all (two drawn slices
+/// that show it) the rule for two slices decides (`two_slices`).
 pub const FEW_HELD_OUT: usize = 3;
 
 /// Whether a structure shown on the drawn slices of a compact stack as
