@@ -277,8 +277,15 @@ pub const BLIND_WALK_GAP: usize = 6;
 /// (`interslice bench`) this moves only brain1 at k = 1 (edge contrast
 /// 9.2): 0.6342 → 0.6984 on the skipped slices, level with the walker
 /// anchor; walking only the gaps that jump, the prior keeping the rest,
-/// gave 0.6715. At k = 2–4 the fusion or the walk is already taken, and
-/// no other mask jumps.
+/// gave 0.6715. At k = 2–4 the fusion or the walk is already taken.
+///
+/// Only where the blurred image separates the two sides of the drawn
+/// outlines by [`FEW_SEPARATION`] or more (brain1: 0.92–0.94): the AAL
+/// hippocampus, a curved structure whose outlines share under 40 % across
+/// gaps of 5–8 slices, has a contrast of about 4 on the low-noise colin27
+/// T1 but a separation of 0.70, and the walk lost 0.019 and 0.016 to the
+/// shape at k = 4 and 7 (hippocampus-r: 0.8418 / 0.8005 against 0.8611 /
+/// 0.8163).
 pub const JUMP_WALK_CONTRAST: f64 = EDGE_CONTRAST;
 
 /// Contrast of the traced boundary over the image's noise
@@ -342,7 +349,8 @@ pub const THIN_SHAPE_GAP: usize = 3;
 ///
 /// Why: one or two held-out slices rank a fit of the image as noisily as
 /// they rank the shape candidates, and where the image barely tells the
-/// sides apart a fit that clears the bar on them is chance. On the AAL
+/// sides apart a fit that clears the bar on them is chance (the same bar
+/// keeps the walk off outlines that jump, [`JUMP_WALK_CONTRAST`]). On the AAL
 /// structures of `interslice bench` (deep grey structures on a T1,
 /// separations 0.51–0.66) the image read on so few slices lost to the
 /// shape by up to 0.13 (pallidum-l at k = 6–9: 0.74 / 0.72 / 0.67 / 0.66
@@ -1029,6 +1037,7 @@ impl ImageGuided {
             if plan.walk == Walk::Off
                 && !plan.fuses()
                 && !jumping_gaps(input)?.is_empty()
+                && plan.separation() >= FEW_SEPARATION
                 && self.edge_contrast(input, &drawn_pairs) >= JUMP_WALK_CONTRAST
             {
                 // See `JUMP_WALK_CONTRAST`.
