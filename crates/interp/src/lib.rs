@@ -33,4 +33,6 @@ pub mod slices;
 
 pub use labels::{interpolate_labels, interpolate_labels_as, interpolate_labels_with_confidence};
 pub use method::{BoxReach, InterpError, Interpolator, SparseMask};
-pub use registry::{DEFAULT_METHOD, IMAGE_METHOD, by_name, by_name_with_image, methods};
+pub use registry::{
+    DEFAULT_METHOD, IMAGE_METHOD, by_name, by_name_with_image, default_method, methods,
+};

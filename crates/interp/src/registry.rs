@@ -10,6 +10,16 @@ pub const DEFAULT_METHOD: &str = "shape-auto";
 /// The method used when an intensity image is given and no method is named.
 pub const IMAGE_METHOD: &str = "image-guided";
 
+/// The method used when none is named: [`IMAGE_METHOD`] with the cell's
+/// intensity image, [`DEFAULT_METHOD`] without.
+pub fn default_method(with_image: bool) -> &'static str {
+    if with_image {
+        IMAGE_METHOD
+    } else {
+        DEFAULT_METHOD
+    }
+}
+
 /// Every interpolator, the default first.
 pub fn methods() -> Vec<Box<dyn Interpolator>> {
     let mut all: Vec<Box<dyn Interpolator>> = vec![

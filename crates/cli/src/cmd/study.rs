@@ -167,7 +167,7 @@ pub fn run(a: Args) -> Result<()> {
     // The curve of the default method when studied, else the first method's.
     let shown = names
         .iter()
-        .find(|&&m| m == interslice_interp::DEFAULT_METHOD)
+        .find(|&&m| m == ctx.default_method())
         .or(names.first())
         .copied()
         .unwrap_or_default();

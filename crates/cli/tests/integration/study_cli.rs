@@ -275,3 +275,68 @@ fn the_oracle_strategy_is_never_below_uniform_spacing() {
     assert!(md.contains("uniform against oracle"), "{md}");
     assert!(md.contains("| oracle (volume) |"), "{md}");
 }
+
+/// `study --image`: the image-guided method is studied beside the shape
+/// methods on the cell's intensities, is named the default (what
+/// `interpolate` uses with the image), and is at least the shape default
+/// on the noisy phantom's nucleus; an image on another grid is refused.
+#[test]
+fn study_with_the_image_compares_the_image_method_with_the_shape_methods() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
+        size: 48,
+        seed: 3,
+        bits: 8,
+        noise: 0.1,
+    })
+    .unwrap();
+    let (gt, image) = (dir.path().join("gt.nii.gz"), dir.path().join("img.nii.gz"));
+    interslice_io::write_labels(&gt, &p.labels).unwrap();
+    interslice_io::write_volume(&image, &p.intensity).unwrap();
+    let out = dir.path().join("study");
+    let args = [
+        "--image",
+        image.to_str().unwrap(),
+        "--skips",
+        "1,5",
+        "--methods",
+        "shape-auto,image-guided",
+        "--label",
+        "2",
+        "--quiet",
+    ];
+    let r = study(&gt, &out, &args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["default_method"], "image-guided");
+    let dice = |method: &str, k: u64| {
+        json["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["method"] == method && r["skip"] == k)
+            .and_then(|r| r["dice_skipped"].as_f64())
+            .unwrap_or_else(|| panic!("no row for {method} k={k}"))
+    };
+    for k in [1, 5] {
+        let (g, s) = (dice("image-guided", k), dice("shape-auto", k));
+        println!("study --image k={k}: image-guided {g:.4}, shape-auto {s:.4}");
+        assert!(g >= s - 0.005 && g > 0.9, "k={k}: {g} vs {s}");
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("the default method is `image-guided`"), "{md}");
+    // The image of another cell (another grid) is an error.
+    let small = interslice_core::phantom::generate(&interslice_core::phantom::PhantomParams {
+        size: 32,
+        seed: 3,
+        bits: 8,
+        noise: 0.1,
+    })
+    .unwrap();
+    interslice_io::write_volume(&image, &small.intensity).unwrap();
+    let r = study(&gt, &dir.path().join("bad"), &args);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}

@@ -26,7 +26,7 @@ use crate::error::{ProjectError, ResultExt};
 use interslice_core::metrics::{Metrics, evaluate_label};
 use interslice_core::{Axis, LabelVolume};
 use interslice_interp::protocol::{dice_on, drawn_for, sparse_of};
-use interslice_interp::{DEFAULT_METHOD, Interpolator, interpolate_labels};
+use interslice_interp::{IMAGE_METHOD, Interpolator, default_method, interpolate_labels};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -122,6 +122,15 @@ pub struct StudyReport<'a> {
     pub seconds_per_contour: f64,
 }
 
+impl StudyReport<'_> {
+    /// The method `interpolate` uses on this cell without `--method`: the
+    /// image method when the study has the cell's image, the shape default
+    /// otherwise.
+    pub fn default_method(&self) -> &'static str {
+        default_method(self.methods.contains(&IMAGE_METHOD))
+    }
+}
+
 /// A metric of a row by its JSON key (`None` for null).
 fn metric(r: &Row, key: &str) -> Option<f64> {
     let m = &r.metrics;
@@ -211,7 +220,7 @@ fn json(ctx: &StudyReport<'_>) -> Result<String, ProjectError> {
         "axis": ctx.axis,
         "labels": ctx.labels,
         "methods": ctx.methods,
-        "default_method": DEFAULT_METHOD,
+        "default_method": ctx.default_method(),
         "skips": ctx.skips,
         "seconds": ctx.seconds,
         "seconds_per_contour": ctx.seconds_per_contour,
@@ -220,11 +229,13 @@ fn json(ctx: &StudyReport<'_>) -> Result<String, ProjectError> {
     serde_json::to_string_pretty(&v).map_err(|e| ProjectError::internal(e.to_string()))
 }
 
-/// One SVG: the metric against the number of skipped slices, a line per method.
+/// One SVG: the metric against the number of skipped slices, a line per
+/// method, the `default` one drawn thicker.
 fn plot(
     title: &str,
     series: &[(String, Vec<Option<f64>>)],
     skips: &[usize],
+    default: &str,
 ) -> Result<String, ProjectError> {
     use plotters::prelude::*;
     let vals: Vec<f64> = series
@@ -271,7 +282,7 @@ fn plot(
             .zip(v)
             .filter_map(|(&k, y)| y.map(|y| (k as f64, y)))
             .collect();
-        let width = if name == DEFAULT_METHOD { 3 } else { 2 };
+        let width = if name == default { 3 } else { 2 };
         chart
             .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(width)))
             .map_err(|e| err(&e))?
@@ -374,7 +385,7 @@ fn summary(ctx: &StudyReport<'_>) -> String {
         g.unit.symbol(),
         ctx.axis,
         ctx.labels,
-        DEFAULT_METHOD
+        ctx.default_method()
     );
     let _ = writeln!(
         s,
@@ -507,7 +518,7 @@ fn effort_section(s: &mut String, ctx: &StudyReport<'_>) {
     let shown = ctx
         .methods
         .iter()
-        .find(|&&m| m == DEFAULT_METHOD)
+        .find(|&&m| m == ctx.default_method())
         .or(ctx.methods.first());
     if let Some(&m) = shown {
         let _ = writeln!(
@@ -584,8 +595,13 @@ pub fn write(out: &Path, ctx: &StudyReport<'_>) -> Result<(), ProjectError> {
             String::new()
         };
         let path = out.join(format!("{key}.svg"));
-        let svg = plot(&format!("{title}{unit}"), &series, ctx.skips)
-            .context_with(|| format!("writing {}", path.display()))?;
+        let svg = plot(
+            &format!("{title}{unit}"),
+            &series,
+            ctx.skips,
+            ctx.default_method(),
+        )
+        .context_with(|| format!("writing {}", path.display()))?;
         super::write_text(&path, &svg)?;
     }
     super::write_text(&out.join("summary.md"), &summary(ctx))
