@@ -78,8 +78,10 @@ impl BoxReach {
 /// ([`BoxReach::Image`]): the fusion's band at the middle of the widest gap
 /// between the drawn `slices` ([`crate::image::fuse::band`], at most 40
 /// pixels), and two more, the neighbour the band's smoothing reads and the
-/// pixel the blur reads beside that; or the walk's margin past the drawn
-/// outlines, whichever is more; plus one.
+/// pixel the blur reads beside that; or twice the walk's margin past the
+/// drawn outlines (its box, and the ring around it its confidence's scale
+/// is fitted on, `image::walk::Walked::fit_region`), whichever is more;
+/// plus one.
 fn image_margin(geometry: &Geometry, axis: Axis, slices: &[DrawnSlice<'_>]) -> usize {
     let plane = Plane::along(geometry, axis);
     let widest = slices
@@ -89,7 +91,7 @@ fn image_margin(geometry: &Geometry, axis: Axis, slices: &[DrawnSlice<'_>]) -> u
         .unwrap_or(1);
     let b = f64::from(band(&plane, widest as f64 / 2.0));
     let px = plane.spacing[0].min(plane.spacing[1]);
-    ((b / px).ceil() as usize + 2).max(walk::MARGIN) + 1
+    ((b / px).ceil() as usize + 2).max(2 * walk::MARGIN) + 1
 }
 
 /// The confidence taken as 1 outside a label's box

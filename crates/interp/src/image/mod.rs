@@ -1166,9 +1166,23 @@ impl ImageGuided {
                 .unzip();
             (held_dice(&masks), logits)
         };
-        let fit_scale = |logits: &[Vec<f32>]| {
-            let truths = odd.iter().map(|&i| &cases[i].0);
-            best_scale(&WALK_SCALES, logits.iter().zip(truths))
+        // On the walk's box and a ring around it (`Walked::fit_region`).
+        let fit_scale = |walked: &walk::Walked, logits: &[Vec<f32>]| {
+            let region = walked.fit_region(&plane);
+            let within = |z: &[f32], truth: &[bool]| -> (Vec<f32>, Vec<bool>) {
+                z.iter()
+                    .zip(truth)
+                    .zip(&region)
+                    .filter(|&(_, &r)| r)
+                    .map(|((&z, &t), _)| (z, t))
+                    .unzip()
+            };
+            let pairs: Vec<(Vec<f32>, Vec<bool>)> = logits
+                .iter()
+                .zip(&odd)
+                .map(|(z, &i)| within(z, &cases[i].0))
+                .collect();
+            best_scale(&WALK_SCALES, pairs.iter().map(|(z, t)| (z, t)))
         };
         let fused = held_dice(&ours);
         let in_band = |delta: f64| band(&plane, delta);
@@ -1184,7 +1198,7 @@ impl ImageGuided {
         let clears = |walk: f64, than: f64| walk > than + MARGIN && 1.0 - walk < rho * (1.0 - than);
         if clears(banded, fused) {
             plan.walk = Walk::Band;
-            plan.walk_scale = fit_scale(&band_logits);
+            plan.walk_scale = fit_scale(&walked, &band_logits);
         }
         if !wide || 1.0 - banded > BOX_WALK_GATE * (1.0 - fused) {
             return Ok(());
@@ -1201,7 +1215,7 @@ impl ImageGuided {
         };
         if clears(boxed, chosen) {
             plan.walk = Walk::Box;
-            plan.walk_scale = fit_scale(&box_logits);
+            plan.walk_scale = fit_scale(&walked, &box_logits);
         }
         Ok(())
     }
