@@ -60,12 +60,12 @@ pub fn by_name_with_image(
     name: Option<&str>,
     image: Option<Conditioned>,
 ) -> Result<Box<dyn Interpolator>, InterpError> {
-    match (name, image) {
-        (None | Some(IMAGE_METHOD), Some(img)) => Ok(Box::new(ImageGuided::new(img))),
-        (Some(IMAGE_METHOD), None) => Err(InterpError::Input(format!(
+    match (name.unwrap_or(default_method(image.is_some())), image) {
+        (IMAGE_METHOD, Some(img)) => Ok(Box::new(ImageGuided::new(img))),
+        (IMAGE_METHOD, None) => Err(InterpError::Input(format!(
             "method {IMAGE_METHOD} needs the intensity volume (--image)"
         ))),
-        (name, _) => by_name(name.unwrap_or(DEFAULT_METHOD)).map_err(|e| match e {
+        (name, _) => by_name(name).map_err(|e| match e {
             InterpError::Input(m) => {
                 InterpError::Input(format!("{m}, {IMAGE_METHOD} (with an image)"))
             }

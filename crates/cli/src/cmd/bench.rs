@@ -198,10 +198,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             Some(&image),
         )?);
     } else {
-        eprintln!(
-            "bench: no {} (run scripts/fetch-interp-data.sh)",
-            sd.display()
-        );
+        missing(&sd);
     }
     let pr = dir.join("pyradiomics");
     for (family, name) in [
@@ -213,10 +210,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
     ] {
         let lp = pr.join(format!("{name}_label.nrrd"));
         if !lp.is_file() {
-            eprintln!(
-                "bench: no {} (run scripts/fetch-interp-data.sh)",
-                lp.display()
-            );
+            missing(&lp);
             continue;
         }
         let labels = interslice_io::read_labels(&lp)?;
@@ -241,10 +235,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             )?);
         }
     } else {
-        eprintln!(
-            "bench: no {} (run scripts/fetch-interp-data.sh)",
-            itk.display()
-        );
+        missing(&itk);
     }
     let mni = dir.join("mni");
     if mni.join("wm.nii.gz").is_file() {
@@ -264,10 +255,7 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             )?);
         }
     } else {
-        eprintln!(
-            "bench: no {} (run scripts/fetch-interp-data.sh)",
-            mni.display()
-        );
+        missing(&mni);
     }
     let aal = dir.join("aal");
     if aal.join("aal.nii.gz").is_file() {
@@ -282,12 +270,17 @@ fn load_cases(dir: &Path) -> Result<Vec<Case>> {
             )?);
         }
     } else {
-        eprintln!(
-            "bench: no {} (run scripts/fetch-interp-data.sh)",
-            aal.display()
-        );
+        missing(&aal);
     }
     Ok(cases)
+}
+
+/// Says on stderr that a family's data is not at `path`, and how to get it.
+fn missing(path: &Path) {
+    eprintln!(
+        "bench: no {} (run scripts/fetch-interp-data.sh)",
+        path.display()
+    );
 }
 
 /// The structures of the AAL atlas (Tzourio-Mazoyer et al. 2002, labels of

@@ -164,13 +164,7 @@ pub fn run(a: Args) -> Result<()> {
         seconds_per_contour: f64::from(a.seconds_per_contour),
     };
     write(&a.out, &ctx)?;
-    // The curve of the default method when studied, else the first method's.
-    let shown = names
-        .iter()
-        .find(|&&m| m == ctx.default_method())
-        .or(names.first())
-        .copied()
-        .unwrap_or_default();
+    let shown = ctx.curve_method().unwrap_or_default();
     for (m, k, n, minutes, sk, vol) in effort_curve(&ctx) {
         if m == shown {
             println!(

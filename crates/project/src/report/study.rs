@@ -129,6 +129,15 @@ impl StudyReport<'_> {
     pub fn default_method(&self) -> &'static str {
         default_method(self.methods.contains(&IMAGE_METHOD))
     }
+
+    /// The method whose time-to-ground-truth curve is shown: the default
+    /// when it was studied, else the first studied method.
+    pub fn curve_method(&self) -> Option<&str> {
+        let default = self.default_method();
+        (self.methods.iter().find(|&&m| m == default))
+            .or(self.methods.first())
+            .copied()
+    }
 }
 
 /// A metric of a row by its JSON key (`None` for null).
@@ -515,12 +524,7 @@ fn effort_section(s: &mut String, ctx: &StudyReport<'_>) {
             }
         }
     }
-    let shown = ctx
-        .methods
-        .iter()
-        .find(|&&m| m == ctx.default_method())
-        .or(ctx.methods.first());
-    if let Some(&m) = shown {
+    if let Some(m) = ctx.curve_method() {
         let _ = writeln!(
             s,
             "\nThe curve of `{m}`:\n\n| k | traced slices | minutes | Dice (skipped) | Dice (volume) |\n|---:|---:|---:|---:|---:|"
