@@ -38,7 +38,7 @@ pub const ALIKE: f64 = 0.25;
 /// inside the larger (a cone: share 1, blended) however different their
 /// areas. A drawn-empty slice is no jump: the structure ends there, and
 /// `shape-aligned` caps it. Nor is an outline that moves little per slice
-/// and far across a wide gap ([`slow_drift`]), or one that drifts steadily
+/// and far across a wide gap (`slow_drift`, [`SLOW_STEP`]), or one that drifts steadily
 /// ([`drifting_gaps`]).
 ///
 /// Decided from the tracing alone, whatever the leave-one-out chose: with
@@ -149,7 +149,7 @@ fn slow_drift(a: &[bool], b: &[bool], step: Option<[f64; 2]>, plane: &Plane) -> 
 }
 
 /// Pieces (8-connected) an outline may have on each of two drawn slices
-/// for its centroid's step to say how far it moved ([`slow_drift`]): on
+/// for its centroid's step to say how far it moved (`slow_drift`): on
 /// stardist's nuclei traced as one binary mask (8.8 pieces a slice) the
 /// whole slice's centroid says nothing of any nucleus, and counting them
 /// as drifting cost `shape-auto` 0.003 and `image-guided` 0.016 at k = 8;
@@ -157,7 +157,7 @@ fn slow_drift(a: &[bool], b: &[bool], step: Option<[f64; 2]>, plane: &Plane) -> 
 pub const SLOW_PIECES: usize = 2;
 
 /// Share of an outline's equivalent radius below which its centroid's
-/// step per slice makes it a slow drift, not a jump ([`slow_drift`]).
+/// step per slice makes it a slow drift, not a jump (`slow_drift`).
 ///
 /// Set on `interslice bench`: the AAL family's hippocampus, caudate and
 /// amygdala (1 mm slices) move 0.15–0.25 of their radius a slice along
