@@ -8,9 +8,10 @@
 //! structure it follows a line where the area follows a curve. Here each
 //! skipped slice of a gap whose two drawn slices show the structure is cut
 //! from the blended distance field `(1 − t) d_A + t d_B` at the level that
-//! holds the area of the parabola through the areas of the gap's two drawn
-//! slices and the drawn slice beyond the nearer end
-//! ([`crate::area_profile`]): the blend says where, the profile how much (the
+//! holds the area of the drawn slices' area profile: the parabolas through
+//! the gap's two drawn areas and the one beyond either end, blended across
+//! the gap, or the one parabola where only one end has a drawn slice beyond
+//! it that shows the structure ([`crate::area_profile::profile_area`]): the blend says where, the profile how much (the
 //! way `image-guided` raises a diluted walk to its prior's area). Where no
 //! third drawn slice shows the structure the profile is not known: between
 //! two drawn slices that show it with nothing else drawn, the structure is
@@ -35,7 +36,7 @@
 //! (`tip_area`): a small tip ends within a slice or two of its outline.
 //!
 //! Measured with `interslice bench` (`docs/interpolation.md`).
-use crate::area_profile::{fit_slices, parabola};
+use crate::area_profile::profile_area;
 use crate::shape_based::{blended, drawn_sdfs};
 use crate::slices::{Plane, assemble};
 use crate::{BoxReach, InterpError, Interpolator, SparseMask};
@@ -72,7 +73,7 @@ impl Interpolator for ShapeArea {
     }
 
     fn description(&self) -> &'static str {
-        "signed distance maps blended linearly, each skipped slice cut to the area of the parabola through three drawn slices' areas (between two drawn slices, a round structure's bulge)"
+        "signed distance maps blended linearly, each skipped slice cut to the area of the parabolas through the drawn slices' areas, blended across the gap (between two drawn slices, a round structure's bulge)"
     }
 
     fn for_stack(
@@ -94,9 +95,8 @@ impl Interpolator for ShapeArea {
         assemble(&input, |s| {
             let (g, field) = blended(&sdfs, drawn, s)?;
             let (a, b) = (drawn[g], drawn[g + 1]);
-            let fit = fit_slices(g, n, s - a <= b - s, |i| areas[i] > 0.0);
             let (lo, hi) = (areas[g].min(areas[g + 1]), areas[g].max(areas[g + 1]));
-            let Some(fit) = fit else {
+            let Some(area) = profile_area(drawn, &areas, g, s) else {
                 if pole && lo > 0.0 {
                     let target = pole_area(areas[g], areas[g + 1], b - a, s - a);
                     return Some(cut_to_area(&field, target.round() as usize));
@@ -108,11 +108,6 @@ impl Interpolator for ShapeArea {
                 }
                 return Some(cone);
             };
-            let (area, ..) = parabola(
-                fit.map(|i| drawn[i] as f64),
-                fit.map(|i| areas[i]),
-                s as f64,
-            );
             // An end gap (no drawn slice beyond one of its ends shows the
             // structure) stays between its two drawn areas: the
             // parabola's turn there rests on one side only.
