@@ -280,7 +280,7 @@ pub const BLIND_WALK_GAP: usize = 6;
 /// gave 0.6715. At k = 2–4 the fusion or the walk is already taken.
 ///
 /// Only where the blurred image separates the two sides of the drawn
-/// outlines by [`FEW_SEPARATION`] or more (brain1: 0.92–0.94): the AAL
+/// outlines by [`WEAK_SEPARATION`] or more (brain1: 0.92–0.94): the AAL
 /// hippocampus, a curved structure whose outlines share under 40 % across
 /// gaps of 5–8 slices, has a contrast of about 4 on the low-noise colin27
 /// T1 but a separation of 0.70, and the walk lost 0.019 and 0.016 to the
@@ -352,11 +352,27 @@ pub const EDGE_CONTRAST: f64 = 3.0;
 pub const THIN_SHAPE_GAP: usize = 3;
 
 /// Separation of the two sides of the drawn outlines on the blurred image
-/// ([`IntensityModel::separation`]) below which a structure `shape-auto`
-/// fills by rule on too few held-out slices (`auto::Choice::few`: fewer
-/// than three between two drawn slices that show it) keeps the shape.
+/// ([`IntensityModel::separation`]) below which the image is too weak to
+/// walk on or to read on a few slices: a structure `shape-auto` fills by
+/// rule on too few held-out slices (`auto::Choice::few`: fewer than three
+/// between two drawn slices that show it) keeps the shape, and a label
+/// that is not a field of pieces is not walked (`try_walk`).
 ///
-/// Why: one or two held-out slices rank a fit of the image as noisily as
+/// Why no walk: held out across twice the gap, a walk on such an image
+/// that beats the fusion (or the shape) does not carry over to the
+/// tracer's gap. On the AAL structures of `interslice bench` (separations
+/// 0.50–0.74) the walks chosen so lost up to 0.061 to the shape on the
+/// skipped slices (caudate-l at k = 6: the box walk held out 0.786
+/// against 0.772, on the real slices 0.865 against 0.926); without them
+/// `image-guided` went up by 0.46 in total over k = 1..9, its two losses
+/// thalamus-r at k = 5 and 6 (−0.008, −0.013), and nothing outside AAL
+/// changed. Asking those walks to cut the error below 0.9 / 0.8 / 0.7 of
+/// the fusion's instead gained 0.16 / 0.34 / 0.38. A field of pieces keeps
+/// its walks: on the T1 k-means classes (separations below 0.75 too) they
+/// gain up to 0.11 (class 3), and without them classes 2 and 3 lost
+/// 0.07–0.12 at k ≥ 4.
+///
+/// Why the shape on few slices: one or two held-out slices rank a fit of the image as noisily as
 /// they rank the shape candidates, and where the image barely tells the
 /// sides apart a fit that clears the bar on them is chance (the same bar
 /// keeps the walk off outlines that jump, [`JUMP_WALK_CONTRAST`]). On the AAL
@@ -365,7 +381,7 @@ pub const THIN_SHAPE_GAP: usize = 3;
 /// shape by up to 0.13 (pallidum-l at k = 6–9: 0.74 / 0.72 / 0.67 / 0.66
 /// against 0.83 / 0.83 / 0.81 / 0.79); on the CT and MR lesions (lung2
 /// 0.82–0.85, brain1 0.92–0.94) reading it still won by 0.02–0.22.
-pub const FEW_SEPARATION: f64 = 0.75;
+pub const WEAK_SEPARATION: f64 = 0.75;
 
 /// The narrowest gap, in slices between two drawn ones, across which a walk
 /// that covers less than the shape counts as diluted (`walk::undiluted`).
@@ -990,8 +1006,8 @@ impl ImageGuided {
             }
             return Ok(plan);
         }
-        if choice.few && plan.separation() < FEW_SEPARATION {
-            // See `FEW_SEPARATION`.
+        if choice.few && plan.separation() < WEAK_SEPARATION {
+            // See `WEAK_SEPARATION`.
             return Ok(plan);
         }
         let (compact, held) = (&choice.compact, &choice.held);
@@ -1054,7 +1070,7 @@ impl ImageGuided {
             if plan.walk == Walk::Off
                 && !plan.fuses()
                 && !jumping_gaps(input)?.is_empty()
-                && plan.separation() >= FEW_SEPARATION
+                && plan.separation() >= WEAK_SEPARATION
                 && self.edge_contrast(input, &drawn_pairs) >= JUMP_WALK_CONTRAST
             {
                 // See `JUMP_WALK_CONTRAST`.
@@ -1091,6 +1107,10 @@ impl ImageGuided {
         cases: &[Case<'_>],
         plan: &mut Plan,
     ) -> Result<(), InterpError> {
+        if !plan.field && plan.separation() < WEAK_SEPARATION {
+            // See `WEAK_SEPARATION`.
+            return Ok(());
+        }
         let plane = Plane::of(input);
         let compact = &choice.compact;
         // The held-out slices of the run that keeps the even positions.
