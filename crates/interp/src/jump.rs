@@ -393,10 +393,16 @@ mod tests {
     /// A 64 × 32 × 13 mask holding a disc of radius 4 centred at `cx(z)` on
     /// every slice.
     fn tube(cx: impl Fn(usize) -> f64) -> Mask {
-        let g = Geometry::new([64, 32, 13], [1.0; 3], LengthUnit::Micrometre).unwrap();
+        tube_of(13, 4.0, cx)
+    }
+
+    /// A 64 × 32 × `depth` mask holding a disc of radius `r` centred at
+    /// `cx(z)` on every slice.
+    fn tube_of(depth: usize, r: f64, cx: impl Fn(usize) -> f64) -> Mask {
+        let g = Geometry::new([64, 32, depth], [1.0; 3], LengthUnit::Micrometre).unwrap();
         let mut m: Mask = Volume::zeros(g);
-        for z in 0..13 {
-            m.set_slice(Axis::Z, z, &disc(cx(z), 4.0)).unwrap();
+        for z in 0..depth {
+            m.set_slice(Axis::Z, z, &disc(cx(z), r)).unwrap();
         }
         m
     }
@@ -422,17 +428,6 @@ mod tests {
         assert_eq!(gaps(&zigzag, &drawn), (vec![0, 1, 2], vec![]));
     }
 
-    /// A 64 × 32 × 25 mask holding a disc of radius `r` centred at `cx(z)`
-    /// on every slice.
-    fn tube_of(r: f64, cx: impl Fn(usize) -> f64) -> Mask {
-        let g = Geometry::new([64, 32, 25], [1.0; 3], LengthUnit::Micrometre).unwrap();
-        let mut m: Mask = Volume::zeros(g);
-        for z in 0..25 {
-            m.set_slice(Axis::Z, z, &disc(cx(z), r)).unwrap();
-        }
-        m
-    }
-
     #[test]
     fn an_outline_that_moves_little_per_slice_is_no_jump_however_far_it_goes() {
         // A curve: a fifth of the radius a slice, then a twentieth; drawn
@@ -442,16 +437,16 @@ mod tests {
         let bend = |slope: f64| {
             move |z: usize| 8.0 + slope * z.min(12) as f64 + 0.25 * z.saturating_sub(12) as f64
         };
-        let curved = tube_of(5.0, bend(1.0));
+        let curved = tube_of(25, 5.0, bend(1.0));
         let input = SparseMask::new(&curved, Axis::Z, &drawn);
         assert!(apart_gaps(&input).unwrap().is_empty());
         // The same curve on an outline half as wide moves 0.4 of its
         // radius a slice: a jump.
-        let thin = tube_of(2.5, bend(1.0));
+        let thin = tube_of(25, 2.5, bend(1.0));
         let input = SparseMask::new(&thin, Axis::Z, &drawn);
         assert_eq!(jumping_gaps(&input).unwrap(), vec![0]);
         // And so does the wide one moving twice as fast.
-        let fast = tube_of(5.0, bend(2.0));
+        let fast = tube_of(25, 5.0, bend(2.0));
         let input = SparseMask::new(&fast, Axis::Z, &drawn);
         assert_eq!(jumping_gaps(&input).unwrap(), vec![0]);
     }
