@@ -289,6 +289,27 @@ fn on_a_clean_image_of_thin_classes_the_fusion_reads_the_voxels_as_they_are() {
     }
 }
 
+/// The AAL atlas's structures `wanted` (label, name), each cropped to its
+/// box grown by 8 voxels, with the image-guided method on that part of the
+/// colin27 T1 they were traced on (Debian `mricron-data`).
+fn aal_structures(
+    dir: &std::path::Path,
+    wanted: &[(u16, &'static str)],
+) -> Vec<(&'static str, interslice_core::Mask, ImageGuided)> {
+    let aal = dir.join("aal");
+    let labels = interslice_io::read_labels(&aal.join("aal.nii.gz")).expect("aal.nii.gz");
+    let t1 = intensity_f32(&interslice_io::read_volume(&aal.join("ch2.nii.gz")).expect("ch2"));
+    wanted
+        .iter()
+        .map(|&(label, name)| {
+            let full = labels.mask_of(label);
+            let bb = bounding_box(&full, 8).expect("a structure");
+            let (mask, image) = (crop(&full, bb).unwrap(), crop(&t1, bb).unwrap());
+            (name, mask, ImageGuided::new(Arc::new(image)))
+        })
+        .collect()
+}
+
 /// The AAL atlas's pallidum (left and right), traced by hand on the
 /// colin27 T1 it comes with (Debian `mricron-data`; the AAL structures of
 /// `interslice bench`, the development family nearest the held-out
@@ -303,9 +324,6 @@ fn on_a_clean_image_of_thin_classes_the_fusion_reads_the_voxels_as_they_are() {
 #[test]
 fn on_aal_structures_traced_on_few_slices_the_shape_is_shape_area_and_a_weak_image_is_not_read() {
     let Some(dir) = data_dir() else { return };
-    let aal = dir.join("aal");
-    let labels = interslice_io::read_labels(&aal.join("aal.nii.gz")).expect("aal.nii.gz");
-    let t1 = intensity_f32(&interslice_io::read_volume(&aal.join("ch2.nii.gz")).expect("ch2"));
     let area = interslice_interp::auto::candidates()
         .iter()
         .position(|c| c.name() == "shape-area")
@@ -314,11 +332,7 @@ fn on_aal_structures_traced_on_few_slices_the_shape_is_shape_area_and_a_weak_ima
     // 0.8325 / 0.7669, 0.8104 / 0.7103, 0.7911 / 0.6607 at k = 6..9 (each
     // best `shape-aligned`); right 0.8920 / 0.8829, 0.8720 / 0.8565,
     // 0.8783 / 0.8549, 0.8870 / 0.8472.
-    for (label, name) in [(75u16, "pallidum-l"), (76, "pallidum-r")] {
-        let full = labels.mask_of(label);
-        let bb = bounding_box(&full, 8).expect("a structure");
-        let (mask, image) = (crop(&full, bb).unwrap(), crop(&t1, bb).unwrap());
-        let guided = ImageGuided::new(Arc::new(image));
+    for (name, mask, guided) in aal_structures(&dir, &[(75, "pallidum-l"), (76, "pallidum-r")]) {
         for k in 6..=9 {
             let drawn = drawn_for_skip(&mask, Axis::Z, k).unwrap();
             let sparse = sparse_of(&mask, Axis::Z, &drawn);
@@ -355,14 +369,7 @@ fn on_aal_structures_traced_on_few_slices_the_shape_is_shape_area_and_a_weak_ima
 #[test]
 fn on_aal_caudate_a_weak_image_is_not_walked_and_the_image_method_keeps_up_with_the_shape() {
     let Some(dir) = data_dir() else { return };
-    let aal = dir.join("aal");
-    let labels = interslice_io::read_labels(&aal.join("aal.nii.gz")).expect("aal.nii.gz");
-    let t1 = intensity_f32(&interslice_io::read_volume(&aal.join("ch2.nii.gz")).expect("ch2"));
-    for (label, name) in [(71u16, "caudate-l"), (72, "caudate-r")] {
-        let full = labels.mask_of(label);
-        let bb = bounding_box(&full, 8).expect("a structure");
-        let (mask, image) = (crop(&full, bb).unwrap(), crop(&t1, bb).unwrap());
-        let guided = ImageGuided::new(Arc::new(image));
+    for (name, mask, guided) in aal_structures(&dir, &[(71, "caudate-l"), (72, "caudate-r")]) {
         for k in [4usize, 6, 8] {
             let drawn = drawn_for_skip(&mask, Axis::Z, k).unwrap();
             let sparse = sparse_of(&mask, Axis::Z, &drawn);
