@@ -9,6 +9,7 @@ pub mod advise;
 pub mod aligned;
 pub mod area_profile;
 pub mod auto;
+pub mod ceiling;
 pub mod confidence;
 pub mod contest;
 pub mod crop;

@@ -249,7 +249,7 @@ const CAP_SLACK: f64 = 1.5;
 /// The `target` pixels of `field` with the lowest values (ties at the cut
 /// level all kept): the sublevel set of the blended distance field that holds
 /// the area.
-fn cut_to_area(field: &[f32], target: usize) -> Vec<bool> {
+pub fn cut_to_area(field: &[f32], target: usize) -> Vec<bool> {
     if target == 0 {
         return vec![false; field.len()];
     }

@@ -19,6 +19,7 @@
 use anyhow::{Context, Result, bail};
 use interslice_core::phantom::{PhantomParams, generate};
 use interslice_core::{AnyVolume, Axis, LabelVolume, Mask, Volume};
+use interslice_interp::ceiling::AreaCeiling;
 use interslice_interp::image::walk::RandomWalk;
 use interslice_interp::image::{Conditioned, ImageGuided, intensity_f32};
 use interslice_interp::protocol::{bounding_box, crop, score, score_labels};
@@ -39,7 +40,8 @@ pub struct Args {
     pub skips: Vec<usize>,
     /// Methods, comma-separated (`image-guided` and the image anchor
     /// `random-walk`, a 3D random walker seeded by the drawn slices, run where
-    /// the mask has an image).
+    /// the mask has an image; `area-ceiling`, not a method but a bound read
+    /// from the truth, on the masks of one structure).
     #[arg(
         long,
         value_delimiter = ',',
@@ -107,7 +109,7 @@ pub fn run(a: Args) -> Result<()> {
     let mut rows = Vec::new();
     for c in &cases {
         for name in &a.methods {
-            let Some(method) = method_on(name, c.image.as_ref())? else {
+            let Some(method) = method_on(name, c)? else {
                 continue;
             };
             for &k in &a.skips {
@@ -324,14 +326,17 @@ fn read_on_grid(path: &Path, labels: &LabelVolume) -> Result<Volume<f32>> {
     Ok(img)
 }
 
-/// The method `name`, on `image` for the image methods (`None`: an image
-/// method without an image, skipped).
-fn method_on(name: &str, image: Option<&Conditioned>) -> Result<Option<Box<dyn Interpolator>>> {
-    Ok(match (name, image) {
-        ("image-guided", Some(img)) => Some(Box::new(ImageGuided::new(img.clone()))),
-        ("random-walk", Some(img)) => Some(Box::new(RandomWalk::new(img.clone()))),
-        ("image-guided" | "random-walk", None) => None,
-        (n, _) => Some(by_name(n)?),
+/// The method `name` on `case`: on its image for the image methods, on
+/// its truth for the bound `area-ceiling` (one structure only); `None`
+/// where the case has no image or truth for it (skipped).
+fn method_on(name: &str, case: &Case) -> Result<Option<Box<dyn Interpolator>>> {
+    Ok(match (name, case.image.as_ref(), &case.truth) {
+        ("image-guided", Some(img), _) => Some(Box::new(ImageGuided::new(img.clone()))),
+        ("random-walk", Some(img), _) => Some(Box::new(RandomWalk::new(img.clone()))),
+        ("image-guided" | "random-walk", None, _) => None,
+        ("area-ceiling", _, Truth::Mask(m)) => Some(Box::new(AreaCeiling::new(m.clone()))),
+        ("area-ceiling", _, Truth::Labels(_)) => None,
+        (n, _, _) => Some(by_name(n)?),
     })
 }
 
@@ -444,9 +449,14 @@ fn speed(methods: &[String]) -> Result<()> {
             [lo, lo + dims[a]]
         });
         let m = crop(&mask, bbox)?;
-        let img = Conditioned::from(crop(&image, bbox)?);
+        let case = Case {
+            family: "speed",
+            name: "cell".into(),
+            truth: Truth::Mask(m.clone()),
+            image: Some(Conditioned::from(crop(&image, bbox)?)),
+        };
         for name in methods {
-            let method = method_on(name, Some(&img))?.context("an image method needs the image")?;
+            let method = method_on(name, &case)?.context("the case has an image and a truth")?;
             let s =
                 score(method.as_ref(), &m, Axis::Z, 5)?.context("the cell shows on the crop")?;
             println!(

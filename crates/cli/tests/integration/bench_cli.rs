@@ -128,3 +128,54 @@ fn bench_runs_only_the_masks_named_and_lists_them_for_a_name_it_lacks() {
     assert!(err.contains("phantom1-cell, phantom1-nucleus"), "{err}");
     assert!(!json.exists());
 }
+
+#[test]
+fn bench_prints_the_area_ceiling_on_masks_of_one_structure_only() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("stardist")).unwrap();
+    let (labels, image) = two_balls();
+    interslice_io::write_labels(&dir.path().join("stardist/mask3d.tif"), &labels).unwrap();
+    interslice_io::write_labels(&dir.path().join("stardist/img3d.tif"), &image).unwrap();
+    let json = dir.path().join("rows.json");
+    let out = bin()
+        .args([
+            "bench",
+            "--skips",
+            "3",
+            "--methods",
+            "area-ceiling,shape-area",
+        ])
+        .arg("--json")
+        .arg(&json)
+        .arg("--data")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let dice = |mask: &str, method: &str| {
+        rows.iter()
+            .find(|r| r["mask"] == mask && r["method"] == method)
+            .map(|r| r["dice_skipped"].as_f64().unwrap())
+    };
+    // The label volume has no truth of one structure to read the area from.
+    assert_eq!(dice("stardist-labels", "area-ceiling"), None);
+    assert!(dice("stardist-labels", "shape-area").is_some());
+    for mask in ["stardist-all", "phantom1-cell", "phantom1-nucleus"] {
+        let (ceiling, method) = (
+            dice(mask, "area-ceiling").unwrap(),
+            dice(mask, "shape-area").unwrap(),
+        );
+        // The same blend at the true area: at least the predicted area's
+        // cut, up to the ties at the cut level.
+        assert!(
+            ceiling > 0.85 && ceiling >= method - 0.002,
+            "{mask}: {ceiling} {method}"
+        );
+    }
+}
