@@ -26,33 +26,60 @@ fn two_balls() -> (LabelVolume, LabelVolume) {
     (labels, image)
 }
 
-#[test]
-fn bench_scores_the_masks_and_the_label_volume_it_finds() {
+/// A data folder holding the stardist stand-in (`two_balls`).
+fn data_with_balls() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("stardist")).unwrap();
     let (labels, image) = two_balls();
     interslice_io::write_labels(&dir.path().join("stardist/mask3d.tif"), &labels).unwrap();
     interslice_io::write_labels(&dir.path().join("stardist/img3d.tif"), &image).unwrap();
-    let json = dir.path().join("rows.json");
+    dir
+}
+
+/// `interslice bench ARGS --json DIR/rows.json --data DIR`: the run, and
+/// its JSON rows (none where it wrote none).
+fn bench(dir: &std::path::Path, args: &[&str]) -> (std::process::Output, Vec<serde_json::Value>) {
+    let json = dir.join("rows.json");
+    let _ = std::fs::remove_file(&json);
     let out = bin()
-        .args([
-            "bench",
-            "--skips",
-            "2",
-            "--methods",
-            "nearest,shape-auto",
-            "--json",
-        ])
+        .arg("bench")
+        .args(args)
+        .arg("--json")
         .arg(&json)
         .arg("--data")
-        .arg(dir.path())
+        .arg(dir)
         .output()
         .unwrap();
+    let rows = std::fs::read_to_string(&json)
+        .map(|t| serde_json::from_str(&t).unwrap())
+        .unwrap_or_default();
+    (out, rows)
+}
+
+/// The skipped slices' Dice of `method` on `mask` among `rows`.
+fn dice(rows: &[serde_json::Value], mask: &str, method: &str) -> Option<f64> {
+    rows.iter()
+        .find(|r| r["mask"] == mask && r["method"] == method)
+        .map(|r| r["dice_skipped"].as_f64().unwrap())
+}
+
+/// The run succeeded (its stderr shown where not).
+fn assert_ran(out: &std::process::Output) {
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+#[test]
+fn bench_scores_the_masks_and_the_label_volume_it_finds() {
+    let dir = data_with_balls();
+    let (out, rows) = bench(
+        dir.path(),
+        &["--skips", "2", "--methods", "nearest,shape-auto"],
+    );
+    assert_ran(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("| stardist nuclei, labelled (1) | shape-auto |"),
@@ -60,14 +87,8 @@ fn bench_scores_the_masks_and_the_label_volume_it_finds() {
     );
     // The families without data are named, not fatal.
     assert!(String::from_utf8_lossy(&out.stderr).contains("pyradiomics"));
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let dice = |mask: &str, method: &str| {
-        rows.iter()
-            .find(|r| r["mask"] == mask && r["method"] == method)
-            .unwrap_or_else(|| panic!("no row {mask} {method}"))["dice_skipped"]
-            .as_f64()
-            .unwrap()
+        dice(&rows, mask, method).unwrap_or_else(|| panic!("no row {mask} {method}"))
     };
     // Four phantom masks, the balls as one mask and as labels, two methods.
     assert_eq!(rows.len(), 6 * 2);
@@ -89,87 +110,42 @@ fn bench_scores_the_masks_and_the_label_volume_it_finds() {
 #[test]
 fn bench_runs_only_the_masks_named_and_lists_them_for_a_name_it_lacks() {
     let dir = tempfile::tempdir().unwrap();
-    let json = dir.path().join("rows.json");
     let run = |masks: &str| {
-        bin()
-            .args([
-                "bench",
-                "--skips",
-                "3",
-                "--methods",
-                "nearest",
-                "--masks",
-                masks,
-            ])
-            .arg("--json")
-            .arg(&json)
-            .arg("--data")
-            .arg(dir.path())
-            .output()
-            .unwrap()
+        bench(
+            dir.path(),
+            &["--skips", "3", "--methods", "nearest", "--masks", masks],
+        )
     };
-    let out = run("phantom2-nucleus");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let (out, rows) = run("phantom2-nucleus");
+    assert_ran(&out);
     assert_eq!(rows.len(), 1);
     assert_eq!(rows[0]["mask"], "phantom2-nucleus");
     assert!(rows[0]["dice_skipped"].as_f64().unwrap() > 0.8);
     // A mask the data lacks: one line naming those there are, no rows.
-    std::fs::remove_file(&json).unwrap();
-    let out = run("phantom1-cell,brain1");
+    let (out, rows) = run("phantom1-cell,brain1");
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("no mask brain1"), "{err}");
     assert!(err.contains("phantom1-cell, phantom1-nucleus"), "{err}");
-    assert!(!json.exists());
+    assert!(rows.is_empty());
+    assert!(!dir.path().join("rows.json").exists());
 }
 
 #[test]
 fn bench_prints_the_area_ceiling_on_masks_of_one_structure_only() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir(dir.path().join("stardist")).unwrap();
-    let (labels, image) = two_balls();
-    interslice_io::write_labels(&dir.path().join("stardist/mask3d.tif"), &labels).unwrap();
-    interslice_io::write_labels(&dir.path().join("stardist/img3d.tif"), &image).unwrap();
-    let json = dir.path().join("rows.json");
-    let out = bin()
-        .args([
-            "bench",
-            "--skips",
-            "3",
-            "--methods",
-            "area-ceiling,shape-area",
-        ])
-        .arg("--json")
-        .arg(&json)
-        .arg("--data")
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let dir = data_with_balls();
+    let (out, rows) = bench(
+        dir.path(),
+        &["--skips", "3", "--methods", "area-ceiling,shape-area"],
     );
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let dice = |mask: &str, method: &str| {
-        rows.iter()
-            .find(|r| r["mask"] == mask && r["method"] == method)
-            .map(|r| r["dice_skipped"].as_f64().unwrap())
-    };
+    assert_ran(&out);
     // The label volume has no truth of one structure to read the area from.
-    assert_eq!(dice("stardist-labels", "area-ceiling"), None);
-    assert!(dice("stardist-labels", "shape-area").is_some());
+    assert_eq!(dice(&rows, "stardist-labels", "area-ceiling"), None);
+    assert!(dice(&rows, "stardist-labels", "shape-area").is_some());
     for mask in ["stardist-all", "phantom1-cell", "phantom1-nucleus"] {
         let (ceiling, method) = (
-            dice(mask, "area-ceiling").unwrap(),
-            dice(mask, "shape-area").unwrap(),
+            dice(&rows, mask, "area-ceiling").unwrap(),
+            dice(&rows, mask, "shape-area").unwrap(),
         );
         // The same blend at the true area: at least the predicted area's
         // cut, up to the ties at the cut level.
