@@ -139,11 +139,7 @@ fn slow_drift(a: &[bool], b: &[bool], step: Option<[f64; 2]>, plane: &Plane) -> 
     let Some(step) = step else { return false };
     let (width, height) = (plane.width, plane.height);
     let few = |m: &[bool]| label_2d(m, width, height, Connectivity::Full).1.len() <= SLOW_PIECES;
-    let pixel = plane.spacing[0] * plane.spacing[1];
-    let radius = |m: &[bool]| {
-        let area = m.iter().filter(|&&x| x).count() as f64 * pixel;
-        (area / std::f64::consts::PI).sqrt()
-    };
+    let radius = |m: &[bool]| plane.equivalent_radius(m.iter().filter(|&&x| x).count() as f64);
     let moved = (step[0] * plane.spacing[0]).hypot(step[1] * plane.spacing[1]);
     few(a) && few(b) && moved < SLOW_STEP * 0.5 * (radius(a) + radius(b))
 }

@@ -20,6 +20,12 @@ pub struct Plane {
 }
 
 impl Plane {
+    /// The equivalent radius `sqrt(area / π)` of `pixels` pixels of this
+    /// plane, in physical units: how large an outline is, whatever its shape.
+    pub fn equivalent_radius(&self, pixels: f64) -> f64 {
+        (pixels * self.spacing[0] * self.spacing[1] / std::f64::consts::PI).sqrt()
+    }
+
     /// The plane of slices along `input.axis`.
     pub fn of(input: &SparseMask<'_>) -> Plane {
         Plane::along(input.mask.geometry(), input.axis)

@@ -184,7 +184,7 @@ fn search_centres(r: f64, toward: f64, away: f64) -> (f64, f64) {
 /// Equivalent radius `sqrt(area / π)` of a set of components, physical units.
 pub(super) fn equivalent_radius(slice: &Drawn, comps: &[usize], plane: &Plane) -> f64 {
     let area: usize = comps.iter().map(|&c| slice.comps[c].area).sum();
-    (area as f64 * plane.spacing[0] * plane.spacing[1] / std::f64::consts::PI).sqrt()
+    plane.equivalent_radius(area as f64)
 }
 
 /// The cap of the object `comps` of drawn slice `this`, which the drawn slice

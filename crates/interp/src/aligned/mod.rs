@@ -381,9 +381,7 @@ fn match_groups(a: &Drawn, b: &Drawn, plane: &Plane) -> Vec<(Vec<usize>, Vec<usi
         linked[y] = true;
     }
     // Mutual nearest among the unlinked, in physical units.
-    let radius = |c: &Component| {
-        (c.area as f64 * plane.spacing[0] * plane.spacing[1] / std::f64::consts::PI).sqrt()
-    };
+    let radius = |c: &Component| plane.equivalent_radius(c.area as f64);
     let dist = |p: &Component, q: &Component| {
         ((p.centroid[0] - q.centroid[0]) * plane.spacing[0])
             .hypot((p.centroid[1] - q.centroid[1]) * plane.spacing[1])
