@@ -311,8 +311,8 @@ impl ShapeAuto {
                     return Ok(None);
                 }
                 let stacked = c.for_stack(input.axis, &compact.real)?;
-                let held =
-                    compact.held_out_at(stacked.as_deref().unwrap_or(c.as_ref()), input, 4)?;
+                let held = compact
+                    .held_out_to_extrapolate(stacked.as_deref().unwrap_or(c.as_ref()), input)?;
                 if held.is_empty() {
                     return Ok(None);
                 }

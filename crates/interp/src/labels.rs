@@ -180,7 +180,12 @@ fn run<T: Voxel>(
                 Piece::Boxed(b, m, c) => (b, m, c),
                 Piece::Whole(m, c) => (LabelBox::whole(geometry), m, c),
             };
-            contest::paint(&mut out, &b, &m, v, axis, nests);
+            if li == 0 {
+                // Nothing painted yet: nothing to contest.
+                b.paint(&mut out, &m, v);
+            } else {
+                contest::paint(&mut out, &b, &m, v, axis, nests);
+            }
             if let (Some(all), Some(c)) = (conf.as_mut(), c) {
                 b.lower(all, &c);
             }

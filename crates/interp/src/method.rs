@@ -47,6 +47,13 @@ pub struct SparseMask<'a> {
     /// [`InterpError::OutsideBox`] where it would read or paint past them,
     /// instead of clamping there as it does at the volume's sides.
     pub in_box: bool,
+    /// The only skipped slices the caller reads, sorted (a leave-one-out
+    /// run reads its held-out slices and nothing between them): a method
+    /// may leave every other skipped slice empty. `None`: all of them.
+    /// Across four times the gap two of every three skipped slices of the
+    /// stack are never read, and filling them was a third of the default's
+    /// time on a round nucleus.
+    pub only: Option<&'a [usize]>,
 }
 
 impl<'a> SparseMask<'a> {
@@ -59,6 +66,7 @@ impl<'a> SparseMask<'a> {
             cancel: None,
             maps: None,
             in_box: false,
+            only: None,
         }
     }
 
@@ -87,7 +95,7 @@ impl<'a> SparseMask<'a> {
     }
 
     /// The same input for another mask and drawn list (a stack of its drawn
-    /// slices), keeping its cancel, maps and box.
+    /// slices), keeping its cancel, maps and box; every slice of it is read.
     pub fn on<'b>(&self, mask: &'b Mask, drawn: &'b [usize]) -> SparseMask<'b>
     where
         'a: 'b,
@@ -95,8 +103,26 @@ impl<'a> SparseMask<'a> {
         SparseMask {
             mask,
             drawn,
+            only: None,
             ..*self
         }
+    }
+
+    /// The same input, of whose skipped slices only `slices` (sorted) are
+    /// read ([`SparseMask::only`]).
+    pub fn only<'b>(&self, slices: &'b [usize]) -> SparseMask<'b>
+    where
+        'a: 'b,
+    {
+        SparseMask {
+            only: Some(slices),
+            ..*self
+        }
+    }
+
+    /// Whether skipped slice `s` is read by the caller ([`SparseMask::only`]).
+    pub fn wants(&self, s: usize) -> bool {
+        self.only.is_none_or(|o| o.binary_search(&s).is_ok())
     }
 
     /// Whether the work was cancelled (a loop's cheap test).

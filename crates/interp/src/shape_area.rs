@@ -256,10 +256,47 @@ pub fn cut_to_area(field: &[f32], target: usize) -> Vec<bool> {
     if target >= field.len() {
         return vec![true; field.len()];
     }
-    let mut sorted = field.to_vec();
-    let (_, level, _) = sorted.select_nth_unstable_by(target - 1, f32::total_cmp);
-    let level = *level;
+    let level = nth_smallest(field, target - 1);
     field.iter().map(|&v| v <= level).collect()
+}
+
+/// The `n`-th smallest of `values` (0-based, `n < values.len()`) in
+/// `f32::total_cmp`'s order.
+///
+/// Written here rather than `select_nth_unstable` on a copy of the slice:
+/// `shape-area` cuts every skipped slice of a label's box, on every
+/// leave-one-out run of the default too, and that copy and its partitions
+/// were a seventh of the default's time on a round nucleus. One pass counts
+/// the values by the top bits of their order-preserving key, and only the
+/// bucket that holds the `n`-th is copied and selected from.
+fn nth_smallest(values: &[f32], n: usize) -> f32 {
+    const BITS: u32 = 12;
+    // `total_cmp`'s order as an unsigned key: negatives flipped whole,
+    // positives above them.
+    let bucket = |v: f32| {
+        let b = v.to_bits();
+        let key = if b >> 31 == 1 { !b } else { b | 0x8000_0000 };
+        (key >> (32 - BITS)) as usize
+    };
+    let mut counts = vec![0u32; 1 << BITS];
+    for &v in values {
+        counts[bucket(v)] += 1;
+    }
+    let mut before = 0usize;
+    let mut holding = counts.len() - 1;
+    for (b, &c) in counts.iter().enumerate() {
+        if before + c as usize > n {
+            holding = b;
+            break;
+        }
+        before += c as usize;
+    }
+    let mut inside: Vec<f32> = values
+        .iter()
+        .copied()
+        .filter(|&v| bucket(v) == holding)
+        .collect();
+    *inside.select_nth_unstable_by(n - before, f32::total_cmp).1
 }
 
 #[cfg(test)]
@@ -267,6 +304,32 @@ mod tests {
     use super::*;
     use crate::shape_based::ShapeBased;
     use interslice_core::{Axis, Geometry, LengthUnit, Volume};
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The bucketed selection gives what sorting gives, on fields of
+        /// distances with ties, signed zeros, infinities and the far value.
+        #[test]
+        fn nth_smallest_is_the_sorted_value(
+            values in prop::collection::vec(
+                prop_oneof![
+                    -50.0f32..50.0,
+                    (-8i32..8).prop_map(|v| v as f32 * 0.5),
+                    Just(-0.0f32),
+                    Just(crate::sdf::FAR),
+                    Just(f32::INFINITY),
+                    Just(f32::NEG_INFINITY),
+                ],
+                1..400,
+            ),
+            pick in 0.0f64..1.0,
+        ) {
+            let n = ((values.len() as f64 * pick) as usize).min(values.len() - 1);
+            let mut sorted = values.clone();
+            sorted.sort_by(f32::total_cmp);
+            prop_assert_eq!(nth_smallest(&values, n).to_bits(), sorted[n].to_bits());
+        }
+    }
 
     /// A ball of radius 12 voxels centred at z = 14, drawn every `step`
     /// slices from its first to its last.

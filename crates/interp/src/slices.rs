@@ -77,8 +77,9 @@ pub fn assemble(
 ) -> Result<Mask, InterpError> {
     // Once cancelled, no further slice is produced and the run ends in
     // `Err(Cancelled)`: a dropped request stops within one slice's work.
+    // Slices the caller does not read (`SparseMask::only`) are left empty.
     let produce = |s: usize| {
-        if input.is_cancelled() {
+        if input.is_cancelled() || !input.wants(s) {
             None
         } else {
             produce(s)

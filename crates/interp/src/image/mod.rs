@@ -1466,6 +1466,12 @@ impl Interpolator for ImageGuided {
     }
 
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
+        // Every slice: its walk reads the prior on the slices between the
+        // ones a caller reads (`SparseMask::only`).
+        let input = SparseMask {
+            only: None,
+            ..input
+        };
         Ok(self.run(&input, false)?.0)
     }
 
@@ -1481,6 +1487,10 @@ impl Interpolator for ImageGuided {
         &self,
         input: SparseMask<'_>,
     ) -> Result<(Mask, Volume<f32>), InterpError> {
+        let input = SparseMask {
+            only: None,
+            ..input
+        };
         if let Some(on_box) = self.confidence_on_box(&input)? {
             return Ok(on_box);
         }

@@ -76,6 +76,42 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// A caller that reads some skipped slices only (`SparseMask::only`, as
+    /// the leave-one-out runs do) gets exactly what the whole run gives on
+    /// those slices, and the drawn slices as drawn, from every method.
+    #[test]
+    fn a_run_for_some_slices_gives_those_slices_of_the_whole_run(
+        full in blobs(),
+        axis in prop::sample::select(Axis::ALL.to_vec()),
+        picks in prop::collection::btree_set(0usize..16, 2..7),
+        wanted in prop::collection::btree_set(0usize..16, 1..5),
+    ) {
+        let n = full.slice_count(axis);
+        let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
+        prop_assume!(drawn.len() >= 2);
+        let wanted: Vec<usize> = wanted.into_iter().filter(|s| *s < n && !drawn.contains(s)).collect();
+        let mut sparse: Mask = Volume::zeros(full.geometry().clone());
+        for &d in &drawn {
+            sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
+        }
+        for m in methods() {
+            let input = SparseMask::new(&sparse, axis, &drawn);
+            let whole = m.interpolate(input).unwrap();
+            let some = m.interpolate(input.only(&wanted)).unwrap();
+            for s in wanted.iter().chain(&drawn) {
+                prop_assert_eq!(
+                    some.slice(axis, *s).unwrap(),
+                    whole.slice(axis, *s).unwrap(),
+                    "{} slice {}={}", m.name(), axis, s
+                );
+            }
+        }
+    }
+}
+
 /// A method as it is, recording the dims of every volume it is run on.
 struct Recorded<'a>(&'a dyn Interpolator, Mutex<Vec<[usize; 3]>>);
 
