@@ -22,19 +22,26 @@ pub fn neighbours_2d(
     h: usize,
     conn: Connectivity,
 ) -> impl Iterator<Item = usize> {
-    let (u, v) = ((i % w) as i64, (i / w) as i64);
+    // Written out into an array rather than chained adapters (a flat map
+    // with a filter): the image method's separation asks this of every
+    // pixel of its band, where the chain was a tenth of its time.
+    let (u, v) = (i % w, i / w);
     let full = conn == Connectivity::Full;
-    (-1i64..=1)
-        .flat_map(move |dv| (-1i64..=1).map(move |du| (du, dv)))
-        .filter(move |&(du, dv)| {
-            (du, dv) != (0, 0)
-                && (full || du == 0 || dv == 0)
-                && u + du >= 0
-                && v + dv >= 0
-                && u + du < w as i64
-                && v + dv < h as i64
-        })
-        .map(move |(du, dv)| (u + du) as usize + w * (v + dv) as usize)
+    let mut out = [0usize; 8];
+    let mut n = 0;
+    for vv in [v.wrapping_sub(1), v, v + 1] {
+        if vv >= h {
+            continue;
+        }
+        for uu in [u.wrapping_sub(1), u, u + 1] {
+            if uu >= w || (uu == u && vv == v) || (!full && uu != u && vv != v) {
+                continue;
+            }
+            out[n] = uu + w * vv;
+            n += 1;
+        }
+    }
+    out.into_iter().take(n)
 }
 
 /// Connected components of the pixels where `mask` is true, one after the
