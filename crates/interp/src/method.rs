@@ -52,7 +52,11 @@ pub struct SparseMask<'a> {
     /// may leave every other skipped slice empty. `None`: all of them.
     /// Across four times the gap two of every three skipped slices of the
     /// stack are never read, and filling them was a third of the default's
-    /// time on a round nucleus.
+    /// time on a round nucleus. [`crate::slices::assemble`] honours it; a
+    /// method that reads its own result between slices (the image method's
+    /// walk reads its prior on every slice) runs with `None` instead. The
+    /// property test `a_run_for_some_slices_gives_those_slices_of_the_whole_run`
+    /// holds every method of `methods()` to it.
     pub only: Option<&'a [usize]>,
 }
 

@@ -12,6 +12,17 @@ use proptest::prelude::*;
 use crate::common::Unboxed;
 use std::sync::Mutex;
 
+/// `full` on the `drawn` slices along `axis`, empty elsewhere.
+fn drawn_only(full: &Mask, axis: Axis, drawn: &[usize]) -> Mask {
+    let mut sparse: Mask = Volume::zeros(full.geometry().clone());
+    for &d in drawn {
+        sparse
+            .set_slice(axis, d, &full.slice(axis, d).unwrap())
+            .unwrap();
+    }
+    sparse
+}
+
 /// Up to three random ellipsoids in a small anisotropic volume.
 fn blobs() -> impl Strategy<Value = Mask> {
     let ell = (
@@ -58,10 +69,7 @@ proptest! {
         let n = full.slice_count(axis);
         let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
         prop_assume!(drawn.len() >= 2);
-        let mut sparse: Mask = Volume::zeros(full.geometry().clone());
-        for &d in &drawn {
-            sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
-        }
+        let sparse = drawn_only(&full, axis, &drawn);
         for m in methods() {
             let out = m.interpolate(SparseMask::new(&sparse, axis, &drawn)).unwrap();
             prop_assert_eq!(out.geometry(), full.geometry());
@@ -74,10 +82,6 @@ proptest! {
             }
         }
     }
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
     /// A caller that reads some skipped slices only (`SparseMask::only`, as
     /// the leave-one-out runs do) gets exactly what the whole run gives on
@@ -93,10 +97,7 @@ proptest! {
         let drawn: Vec<usize> = picks.into_iter().filter(|&d| d < n).collect();
         prop_assume!(drawn.len() >= 2);
         let wanted: Vec<usize> = wanted.into_iter().filter(|s| *s < n && !drawn.contains(s)).collect();
-        let mut sparse: Mask = Volume::zeros(full.geometry().clone());
-        for &d in &drawn {
-            sparse.set_slice(axis, d, &full.slice(axis, d).unwrap()).unwrap();
-        }
+        let sparse = drawn_only(&full, axis, &drawn);
         for m in methods() {
             let input = SparseMask::new(&sparse, axis, &drawn);
             let whole = m.interpolate(input).unwrap();
