@@ -124,6 +124,12 @@ impl<'a> SparseMask<'a> {
         }
     }
 
+    /// The same input, every slice of it read ([`SparseMask::only`]
+    /// cleared): for a method that reads its own result between slices.
+    pub fn every_slice(self) -> SparseMask<'a> {
+        SparseMask { only: None, ..self }
+    }
+
     /// Whether skipped slice `s` is read by the caller ([`SparseMask::only`]).
     pub fn wants(&self, s: usize) -> bool {
         self.only.is_none_or(|o| o.binary_search(&s).is_ok())

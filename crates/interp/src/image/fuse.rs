@@ -122,21 +122,20 @@ fn smooth(z: &mut [f32], phi: &[f32], image: &[f32], plane: &Plane, b: f32, lamb
     // weights, worked out once rather than on every iteration (the
     // exponentials were a sixth of the method's time); the sums below add
     // them in the same order, so the result is the same to the bit.
-    let links: Vec<[(usize, f32); 4]> = in_band
+    let links: Vec<([(usize, f32); 4], usize)> = in_band
         .iter()
         .map(|&i| {
             let (u, v) = (i % w, i / w);
-            let mut l = [(usize::MAX, 0.0f32); 4];
             let near = [
                 (u > 0).then(|| i - 1),
                 (u + 1 < w).then(|| i + 1),
                 (v > 0).then(|| i - w),
                 (v + 1 < h).then(|| i + w),
             ];
-            for (slot, j) in l.iter_mut().zip(near) {
-                if let Some(j) = j {
-                    *slot = (j, lambda * weight(image[i], image[j]));
-                }
+            let mut l = ([(0usize, 0.0f32); 4], 0);
+            for j in near.into_iter().flatten() {
+                l.0[l.1] = (j, lambda * weight(image[i], image[j]));
+                l.1 += 1;
             }
             l
         })
@@ -144,10 +143,10 @@ fn smooth(z: &mut [f32], phi: &[f32], image: &[f32], plane: &Plane, b: f32, lamb
     let z0 = z.to_vec();
     let mut next = z.to_vec();
     for _ in 0..ITERATIONS {
-        for (&i, l) in in_band.iter().zip(&links) {
+        for (&i, (l, m)) in in_band.iter().zip(&links) {
             let mut num = z0[i];
             let mut den = 1.0f32;
-            for &(j, o) in l.iter().filter(|(j, _)| *j != usize::MAX) {
+            for &(j, o) in &l[..*m] {
                 num += o * z[j];
                 den += o;
             }

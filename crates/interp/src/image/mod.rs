@@ -1468,11 +1468,7 @@ impl Interpolator for ImageGuided {
     fn interpolate(&self, input: SparseMask<'_>) -> Result<Mask, InterpError> {
         // Every slice: its walk reads the prior on the slices between the
         // ones a caller reads (`SparseMask::only`).
-        let input = SparseMask {
-            only: None,
-            ..input
-        };
-        Ok(self.run(&input, false)?.0)
+        Ok(self.run(&input.every_slice(), false)?.0)
     }
 
     fn box_reach(&self) -> BoxReach {
@@ -1487,10 +1483,7 @@ impl Interpolator for ImageGuided {
         &self,
         input: SparseMask<'_>,
     ) -> Result<(Mask, Volume<f32>), InterpError> {
-        let input = SparseMask {
-            only: None,
-            ..input
-        };
+        let input = input.every_slice();
         if let Some(on_box) = self.confidence_on_box(&input)? {
             return Ok(on_box);
         }

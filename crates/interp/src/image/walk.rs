@@ -354,18 +354,19 @@ fn walk(
             }
         });
     }
-    // Neighbours of voxel i with their weights.
+    // Neighbours of voxel i with their weights and their bit: 2d for the
+    // +d neighbour, 2d + 1 for the −d one, +d before −d along each axis.
     let nbrs = |i: usize| {
         let c = [i % nu, (i / nu) % nv, i / (nu * nv)];
-        let mut out = [(0usize, 0f32); 6];
+        let mut out = [(0usize, 0f32, 0u8); 6];
         let mut m = 0;
         for d in 0..3 {
             if c[d] + 1 < sizes[d] {
-                out[m] = (i + strides[d], wts[d][i]);
+                out[m] = (i + strides[d], wts[d][i], 1 << (2 * d));
                 m += 1;
             }
             if c[d] > 0 {
-                out[m] = (i - strides[d], wts[d][i - strides[d]]);
+                out[m] = (i - strides[d], wts[d][i - strides[d]], 1 << (2 * d + 1));
                 m += 1;
             }
         }
@@ -378,43 +379,29 @@ fn walk(
     for (a, &i) in unk.iter().enumerate() {
         at[i] = a as u32;
     }
-    // Degree and right-hand side (the weights to inside seeds).
-    let (deg, rhs): (Vec<f32>, Vec<f32>) = unk
+    // Degree, right-hand side (the weights to inside seeds) and which
+    // neighbours are unknowns too (`links`, the bits of `nbrs`): the product
+    // reads those without working out the voxel's coordinates again (three
+    // integer divisions a voxel an iteration were most of its time), and
+    // subtracts in `nbrs`'s order, so the result is the same to the bit.
+    let (deg, (rhs, links)): (Vec<f32>, (Vec<f32>, Vec<u8>)) = unk
         .par_iter()
         .map(|&i| {
             let (nb, m) = nbrs(i);
             let mut d = 0.0;
             let mut r = 0.0;
-            for &(j, w) in &nb[..m] {
+            let mut bits = 0u8;
+            for &(j, w, bit) in &nb[..m] {
                 d += w;
                 if at[j] == u32::MAX {
                     r += w * x[j];
+                } else {
+                    bits |= bit;
                 }
             }
-            (d, r)
+            (d, (r, bits))
         })
         .unzip();
-    // Per unknown voxel, which of its six neighbours are unknowns too: bit
-    // 2d the +d neighbour, bit 2d + 1 the −d one, in `nbrs`'s order. The
-    // product reads them without working out the voxel's coordinates again
-    // (three integer divisions a voxel an iteration were most of its time),
-    // and subtracts in the same order, so the result is the same to the bit.
-    let links: Vec<u8> = unk
-        .par_iter()
-        .map(|&i| {
-            let c = [i % nu, (i / nu) % nv, i / (nu * nv)];
-            let mut bits = 0u8;
-            for d in 0..3 {
-                if c[d] + 1 < sizes[d] && at[i + strides[d]] != u32::MAX {
-                    bits |= 1 << (2 * d);
-                }
-                if c[d] > 0 && at[i - strides[d]] != u32::MAX {
-                    bits |= 1 << (2 * d + 1);
-                }
-            }
-            bits
-        })
-        .collect();
     // L_uu · p over the unknown voxels.
     let apply = |p: &[f32], out: &mut [f32]| {
         out.par_iter_mut().enumerate().for_each(|(a, o)| {
